@@ -1,0 +1,51 @@
+#pragma once
+// An RBF interpolant with appended polynomials: factorise once for a node set, fit any number of
+// value columns, evaluate values and gradients at many points. Used by the particle/grid transfers
+// (PHS s = 5 with degree 2 by default, the paper's transfer setting).
+
+#include <memory>
+#include <span>
+
+#include <Eigen/Core>
+
+#include "liquid/core/types.hpp"
+#include "liquid/rbf/weights.hpp"
+
+namespace liquid::rbf {
+
+namespace detail {
+template <int Dim>
+struct SaddleSystem;
+}
+
+template <int Dim>
+class Interpolant {
+ public:
+  /// Factorises the system for `nodes` (copied). Check status().usable() before fitting.
+  Interpolant(std::span<const Vec<Dim>> nodes, const Config& config);
+  ~Interpolant();
+  Interpolant(Interpolant&&) noexcept;
+  Interpolant& operator=(Interpolant&&) noexcept;
+
+  const Status& status() const { return status_; }
+  int n_nodes() const { return static_cast<int>(nodes_.size()); }
+
+  /// Fits the interpolant to `values` (one row per node, one column per field). Throws when the
+  /// status is not usable or the row count differs from the node count.
+  void fit(const Eigen::MatrixXd& values);
+
+  /// Interpolated fields at x (one entry per fitted column).
+  Eigen::RowVectorXd value(const Vec<Dim>& x) const;
+  /// Gradient of every fitted field at x: row k holds d/dx_k.
+  Eigen::MatrixXd gradient(const Vec<Dim>& x) const;
+
+ private:
+  std::vector<Vec<Dim>> nodes_;  // scaled to the unit ball around centre_
+  Vec<Dim> centre_;
+  double radius_ = 1.0;
+  Status status_;
+  std::unique_ptr<detail::SaddleSystem<Dim>> system_;
+  Eigen::MatrixXd coefficients_;  // (n + n_terms) x n_fields
+};
+
+}  // namespace liquid::rbf

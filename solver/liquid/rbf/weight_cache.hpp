@@ -1,0 +1,60 @@
+#pragma once
+// A cache of RBF-FD basis weights keyed by the stencil's geometry. Stencils on a tree repeat: every
+// T-junction of the same layout, at any level, has the same node offsets once they are divided by
+// the size h of the centre cell. The key is those offsets quantised to a power-of-two quantum
+// (dyadic cell centres land exactly on it) plus the kernel settings; the stored weights are for
+// h = 1 and are rescaled on the way out (1/h per derivative order). Safe under OpenMP: lookups
+// take a shared lock on one of many shards, a miss computes outside any lock.
+
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <shared_mutex>
+#include <span>
+#include <unordered_map>
+#include <vector>
+
+#include "liquid/rbf/weights.hpp"
+
+namespace liquid::rbf {
+
+template <int Dim>
+class WeightCache {
+ public:
+  /// `quantum`: offsets (in units of h) closer than this share an entry.
+  explicit WeightCache(double quantum = 0x1p-24);
+
+  /// Weights of `op` at `at` for `nodes`, with `h` the size of the centre cell. Same contract as
+  /// rbf::weights(). Node order matters: a permuted stencil is a different entry.
+  Status weights(std::span<const Vec<Dim>> nodes, const Vec<Dim>& at, double h, const Operator<Dim>& op,
+                 const Config& config, std::vector<double>& out);
+
+  long hits() const { return hits_.load(std::memory_order_relaxed); }
+  long misses() const { return misses_.load(std::memory_order_relaxed); }
+  std::size_t size() const;
+  void clear();
+
+ private:
+  struct Key {
+    std::vector<std::int64_t> words;
+    bool operator==(const Key& o) const { return words == o.words; }
+  };
+  struct KeyHash {
+    std::size_t operator()(const Key& k) const;
+  };
+  struct Shard {
+    mutable std::shared_mutex mutex;
+    std::unordered_map<Key, std::shared_ptr<const BasisWeights<Dim>>, KeyHash> map;
+  };
+  static constexpr int n_shards = 64;
+
+  Key make_key(std::span<const Vec<Dim>> nodes, const Vec<Dim>& at, double h, const Config& config) const;
+
+  double quantum_;
+  std::unique_ptr<Shard[]> shards_;
+  std::atomic<long> hits_{0};
+  std::atomic<long> misses_{0};
+};
+
+}  // namespace liquid::rbf

@@ -1,0 +1,199 @@
+#include "liquid/rbf/weights.hpp"
+
+#include <cmath>
+
+#include <fmt/format.h>
+
+#include "liquid/core/error.hpp"
+#include "liquid/rbf/saddle.hpp"
+
+namespace liquid::rbf {
+
+const char* to_string(Info info) {
+  switch (info) {
+    case Info::ok: return "ok";
+    case Info::degree_reduced: return "degree_reduced";
+    case Info::empty_stencil: return "empty_stencil";
+    case Info::coincident_nodes: return "coincident_nodes";
+    case Info::singular_system: return "singular_system";
+    case Info::non_finite: return "non_finite";
+  }
+  return "unknown";
+}
+
+std::string Status::describe() const {
+  std::string s = fmt::format("{}: {} nodes, degree {} of {} requested, condition ~{:.2e}", to_string(info),
+                              n_nodes, degree_used, degree_requested, condition);
+  if (info == Info::coincident_nodes) s += fmt::format(", nodes {} and {} coincide", node_a, node_b);
+  return s;
+}
+
+namespace detail {
+
+namespace {
+// Highest degree whose polynomial block has full column rank on these nodes (-1: none).
+template <int Dim>
+int carried_degree(std::span<const Vec<Dim>> z, int requested, double tolerance) {
+  const int n = static_cast<int>(z.size());
+  for (int m = std::min(requested, 4); m >= 0; --m) {
+    PolynomialBasis<Dim> basis(m);
+    const int n_terms = basis.size();
+    if (n_terms > n) continue;
+    Eigen::MatrixXd P(n, n_terms);
+    for (int j = 0; j < n; ++j)
+      for (int t = 0; t < n_terms; ++t) P(j, t) = basis.value(t, z[j]);
+    Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(P);
+    qr.setThreshold(tolerance);
+    if (qr.rank() == n_terms) return m;
+  }
+  return -1;
+}
+}  // namespace
+
+template <int Dim>
+SaddleSystem<Dim>::SaddleSystem(std::span<const Vec<Dim>> z, const Config& config)
+    : kernel(config.exponent), basis(-1) {
+  n_nodes = static_cast<int>(z.size());
+  status.n_nodes = n_nodes;
+  status.degree_requested = config.degree;
+  if (n_nodes == 0) {
+    status.info = Info::empty_stencil;
+    return;
+  }
+  for (int i = 0; i < n_nodes; ++i) {
+    if (!z[i].allFinite()) {
+      status.info = Info::non_finite;
+      status.node_a = i;
+      return;
+    }
+    for (int j = 0; j < i; ++j) {
+      if ((z[i] - z[j]).norm() < config.coincidence_tolerance) {
+        status.info = Info::coincident_nodes;
+        status.node_a = j;
+        status.node_b = i;
+        return;
+      }
+    }
+  }
+  const int degree = carried_degree<Dim>(z, config.degree, config.rank_tolerance);
+  status.degree_used = degree;
+  basis = PolynomialBasis<Dim>(degree);
+  n_terms = basis.size();
+
+  const int size = n_nodes + n_terms;
+  Eigen::MatrixXd K = Eigen::MatrixXd::Zero(size, size);
+  for (int i = 0; i < n_nodes; ++i) {
+    for (int j = 0; j < i; ++j) K(i, j) = K(j, i) = kernel.value((z[i] - z[j]).norm());
+    for (int t = 0; t < n_terms; ++t) K(i, n_nodes + t) = K(n_nodes + t, i) = basis.value(t, z[i]);
+  }
+  qr.compute(K);
+  const auto& R = qr.matrixR();
+  const double r_max = std::abs(R(0, 0));
+  const double r_min = std::abs(R(size - 1, size - 1));
+  status.condition = r_min > 0.0 ? r_max / r_min : std::numeric_limits<double>::infinity();
+  if (qr.rank() < size || !(status.condition <= config.max_condition)) {
+    status.info = Info::singular_system;
+    return;
+  }
+  status.info = degree < config.degree ? Info::degree_reduced : Info::ok;
+}
+
+template struct SaddleSystem<2>;
+template struct SaddleSystem<3>;
+
+}  // namespace detail
+
+template <int Dim>
+void BasisWeights<Dim>::combine(const Operator<Dim>& op, std::vector<double>& out) const {
+  LIQUID_VERIFY(status.usable(), "RBF-FD weights unusable: {}", status.describe());
+  LIQUID_VERIFY(op.laplacian == 0.0 || status.laplacian_defined,
+                "the Laplacian of PHS r^1 is singular at a node on the evaluation point");
+  const Eigen::Index n = w.rows();
+  out.assign(n, 0.0);
+  for (Eigen::Index j = 0; j < n; ++j) {
+    double v = op.value * w(j, 0) + op.laplacian * w(j, Dim + 1);
+    for (int k = 0; k < Dim; ++k) v += op.gradient[k] * w(j, 1 + k);
+    out[j] = v;
+  }
+}
+
+template <int Dim>
+BasisWeights<Dim> basis_weights(std::span<const Vec<Dim>> nodes, const Vec<Dim>& at, const Config& config) {
+  BasisWeights<Dim> result;
+  const int n = static_cast<int>(nodes.size());
+  result.status.n_nodes = n;
+  result.status.degree_requested = config.degree;
+
+  double radius = 0.0;
+  for (const auto& x : nodes) radius = std::max(radius, (x - at).norm());
+  if (!std::isfinite(radius) || !at.allFinite()) {
+    result.status.info = Info::non_finite;
+    return result;
+  }
+  if (n == 0 || radius == 0.0) {
+    result.status.info = Info::empty_stencil;
+    return result;
+  }
+  std::vector<Vec<Dim>> z(n);
+  for (int j = 0; j < n; ++j) z[j] = (nodes[j] - at) / radius;
+
+  detail::SaddleSystem<Dim> system(z, config);
+  result.status = system.status;
+  if (!system.status.usable()) return result;
+
+  // Right-hand sides: the basic operators applied to phi(|x - z_j|) and p_t(x) at x = 0.
+  const int n_terms = system.n_terms;
+  Eigen::Matrix<double, Eigen::Dynamic, Dim + 2> rhs(n + n_terms, Dim + 2);
+  for (int j = 0; j < n; ++j) {
+    const double r = z[j].norm();
+    rhs(j, 0) = system.kernel.value(r);
+    const double g = system.kernel.gradient_factor(r);
+    for (int k = 0; k < Dim; ++k) rhs(j, 1 + k) = -z[j][k] * g;
+    double lap = system.kernel.laplacian(r, Dim);
+    if (!std::isfinite(lap)) {
+      result.status.laplacian_defined = false;
+      lap = 0.0;
+    }
+    rhs(j, Dim + 1) = lap;
+  }
+  const Vec<Dim> origin = Vec<Dim>::Zero();
+  for (int t = 0; t < n_terms; ++t) {
+    rhs(n + t, 0) = system.basis.value(t, origin);
+    for (int k = 0; k < Dim; ++k) rhs(n + t, 1 + k) = system.basis.derivative(t, k, origin);
+    rhs(n + t, Dim + 1) = system.basis.laplacian(t, origin);
+  }
+  Eigen::Matrix<double, Eigen::Dynamic, Dim + 2> solution = system.qr.solve(rhs);
+  result.w = solution.topRows(n);
+  result.w.template middleCols<Dim>(1) /= radius;
+  result.w.col(Dim + 1) /= radius * radius;
+  if (!result.w.allFinite()) {
+    result.status.info = Info::non_finite;
+    result.w.resize(0, Dim + 2);
+  }
+  return result;
+}
+
+template <int Dim>
+Status weights(std::span<const Vec<Dim>> nodes, const Vec<Dim>& at, const Operator<Dim>& op,
+               const Config& config, std::vector<double>& out) {
+  out.clear();
+  BasisWeights<Dim> bw = basis_weights<Dim>(nodes, at, config);
+  if (!bw.status.usable()) return bw.status;
+  if (op.laplacian != 0.0 && !bw.status.laplacian_defined) {
+    bw.status.info = Info::singular_system;
+    return bw.status;
+  }
+  bw.combine(op, out);
+  return bw.status;
+}
+
+template struct BasisWeights<2>;
+template struct BasisWeights<3>;
+template BasisWeights<2> basis_weights<2>(std::span<const Vec<2>>, const Vec<2>&, const Config&);
+template BasisWeights<3> basis_weights<3>(std::span<const Vec<3>>, const Vec<3>&, const Config&);
+template Status weights<2>(std::span<const Vec<2>>, const Vec<2>&, const Operator<2>&, const Config&,
+                           std::vector<double>&);
+template Status weights<3>(std::span<const Vec<3>>, const Vec<3>&, const Operator<3>&, const Config&,
+                           std::vector<double>&);
+
+}  // namespace liquid::rbf

@@ -1,0 +1,76 @@
+// The weight cache: equal to uncached weights, hits on repeated layouts at any level and place,
+// consistent under OpenMP.
+#include <gtest/gtest.h>
+
+#include <omp.h>
+
+#include "../../../verification/common/stencils.hpp"
+#include "liquid/core/error.hpp"
+#include "liquid/rbf/weight_cache.hpp"
+
+namespace liquid::rbf {
+namespace {
+
+TEST(WeightCache, MatchesUncachedWeightsAndHitsOnRepeatedLayouts) {
+  WeightCache<2> cache;
+  const auto base = verification::quadtree_stencil<2>(1, 1.0, 4u);
+  const Config config;
+  std::vector<double> cached, direct;
+  // The same T-junction layout at three levels and two places: one miss, then hits.
+  int calls = 0;
+  for (double h : {0.125, 0.0625, 0.03125}) {
+    for (const Vec<2>& shift : {Vec<2>(0.5, 0.25), Vec<2>(-0.375, 0.75)}) {
+      std::vector<Vec<2>> nodes;
+      for (const auto& x : base) nodes.push_back(shift + h * x);
+      const Status st = cache.weights(nodes, shift, h, Operator<2>::lap(), config, cached);
+      ASSERT_TRUE(st.usable());
+      ASSERT_TRUE(weights<2>(nodes, shift, Operator<2>::lap(), config, direct).usable());
+      ASSERT_EQ(cached.size(), direct.size());
+      for (std::size_t j = 0; j < cached.size(); ++j)
+        EXPECT_NEAR(cached[j], direct[j], 1e-9 * (1.0 + std::abs(direct[j])));
+      ++calls;
+    }
+  }
+  EXPECT_EQ(cache.misses(), 1);
+  EXPECT_EQ(cache.hits(), calls - 1);
+  EXPECT_EQ(cache.size(), 1u);
+  // A different operator on the same geometry reuses the entry.
+  ASSERT_TRUE(cache.weights(base, Vec<2>::Zero(), 1.0, Operator<2>::partial(1), config, cached).usable());
+  EXPECT_EQ(cache.misses(), 1);
+  // Other kernel settings are a different entry.
+  ASSERT_TRUE(cache.weights(base, Vec<2>::Zero(), 1.0, Operator<2>::lap(), Config{5, 2}, cached).usable());
+  EXPECT_EQ(cache.misses(), 2);
+}
+
+TEST(WeightCache, ConsistentUnderOpenMP) {
+  WeightCache<3> cache;
+  const int n_layouts = 8;
+  std::vector<std::vector<Vec<3>>> layouts;
+  for (int i = 0; i < n_layouts; ++i) layouts.push_back(verification::quadtree_stencil<3>(1, 1.0, 100u + i));
+  const int n_queries = 400;
+  std::vector<double> checks(n_queries, 0.0);
+#pragma omp parallel for num_threads(4)
+  for (int q = 0; q < n_queries; ++q) {
+    std::vector<double> w;
+    const auto& nodes = layouts[q % n_layouts];
+    const Status st = cache.weights(nodes, Vec<3>::Zero(), 1.0, Operator<3>::lap(), Config{}, w);
+    checks[q] = st.usable() ? w[0] : std::nan("");
+  }
+  EXPECT_EQ(cache.hits() + cache.misses(), n_queries);
+  EXPECT_EQ(static_cast<int>(cache.size()), n_layouts);
+  EXPECT_LE(cache.misses(), 4 * n_layouts);  // a racing miss may compute twice, never more
+  for (int q = n_layouts; q < n_queries; ++q) EXPECT_EQ(checks[q], checks[q % n_layouts]);
+}
+
+TEST(WeightCache, UnusableStencilsAreCachedAsUnusable) {
+  WeightCache<2> cache;
+  const std::vector<Vec<2>> nodes{{0, 0}, {1, 0}, {1, 0}};
+  std::vector<double> w;
+  EXPECT_EQ(cache.weights(nodes, Vec<2>::Zero(), 1.0, Operator<2>::lap(), Config{}, w).info,
+            Info::coincident_nodes);
+  EXPECT_TRUE(w.empty());
+  EXPECT_THROW(cache.weights(nodes, Vec<2>::Zero(), 0.0, Operator<2>::lap(), Config{}, w), Error);
+}
+
+}  // namespace
+}  // namespace liquid::rbf

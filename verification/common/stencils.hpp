@@ -1,0 +1,81 @@
+#pragma once
+// Scattered test stencils around the origin, shared by the RBF-FD verification case, the unit
+// tests and the benchmarks. All are deterministic for a given seed.
+
+#include <random>
+#include <vector>
+
+#include "liquid/core/types.hpp"
+
+namespace liquid::verification {
+
+/// A (2 * half + 1)^Dim grid of spacing h around the origin, every node but the centre moved by a
+/// uniform random offset of at most `jitter * h` per axis.
+template <int Dim>
+std::vector<Vec<Dim>> jittered_stencil(int half, double h, double jitter, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-jitter, jitter);
+  std::vector<Vec<Dim>> nodes;
+  const int side = 2 * half + 1;
+  int n_total = 1;
+  for (int k = 0; k < Dim; ++k) n_total *= side;
+  for (int i = 0; i < n_total; ++i) {
+    Vec<Dim> x;
+    int rest = i;
+    bool centre = true;
+    for (int k = 0; k < Dim; ++k) {
+      const int c = rest % side - half;
+      rest /= side;
+      x[k] = c * h;
+      centre = centre && c == 0;
+    }
+    if (!centre)
+      for (int k = 0; k < Dim; ++k) x[k] += u(rng) * h;
+    nodes.push_back(x);
+  }
+  return nodes;
+}
+
+/// Cell centres of a small non-graded tree around a centre cell of size h at the origin: a
+/// (2 * half + 1)^Dim block of cells of size h, each neighbour kept (probability 1/2), split once
+/// (1/3) or split twice (1/6), so the stencil has T-junctions with jumps of up to two levels. The
+/// centre cell comes first.
+template <int Dim>
+std::vector<Vec<Dim>> quadtree_stencil(int half, double h, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_int_distribution<int> pick(0, 5);
+  std::vector<Vec<Dim>> nodes{Vec<Dim>::Zero()};
+  const int side = 2 * half + 1;
+  int n_total = 1;
+  for (int k = 0; k < Dim; ++k) n_total *= side;
+  for (int i = 0; i < n_total; ++i) {
+    Vec<Dim> c;
+    int rest = i;
+    bool centre = true;
+    for (int k = 0; k < Dim; ++k) {
+      const int q = rest % side - half;
+      rest /= side;
+      c[k] = q * h;
+      centre = centre && q == 0;
+    }
+    if (centre) continue;
+    const int r = pick(rng);
+    const int splits = r < 3 ? 0 : (r < 5 ? 1 : 2);
+    const int per_axis = 1 << splits;
+    const double child = h / per_axis;
+    int n_children = 1;
+    for (int k = 0; k < Dim; ++k) n_children *= per_axis;
+    for (int j = 0; j < n_children; ++j) {
+      Vec<Dim> x;
+      int rj = j;
+      for (int k = 0; k < Dim; ++k) {
+        x[k] = c[k] - 0.5 * h + (rj % per_axis + 0.5) * child;
+        rj /= per_axis;
+      }
+      nodes.push_back(x);
+    }
+  }
+  return nodes;
+}
+
+}  // namespace liquid::verification
