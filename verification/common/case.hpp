@@ -1,0 +1,62 @@
+#pragma once
+// The verification case interface. A case is one literate .cpp file in verification/cases/ that
+// states its problem at the top, runs its study, fills tables, checks its own expectations and
+// registers itself with LIQUID_VERIFICATION_CASE.
+
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "json.hpp"
+#include "table.hpp"
+
+namespace liquid::verification {
+
+/// Options a user may pass to `liquid-verify run`; a case reads those that apply to it.
+struct CaseOptions {
+  std::optional<int> level_min, level_max;  ///< --levels A:B
+  std::optional<int> max_jump;              ///< --max-jump K
+  std::optional<std::string> solver;        ///< --solver NAME
+  bool full = false;                        ///< the full suite's extent rather than the quick one
+};
+
+struct CaseResult {
+  bool passed = true;
+  std::vector<Table> tables;
+  std::vector<std::string> failures;  ///< every missed expectation, one sentence each
+  std::vector<std::string> notes;     ///< what a reader should know about the numbers
+  Json fields = Json::object();       ///< extra top-level JSON fields ("order", "order_grad", ...)
+
+  /// Records an expectation; a false one fails the case with `what`.
+  void expect(bool ok, const std::string& what) {
+    if (!ok) {
+      passed = false;
+      failures.push_back(what);
+    }
+  }
+};
+
+struct CaseInfo {
+  std::string name;
+  std::string summary;  ///< one line for `liquid-verify list`
+  bool quick = true;    ///< part of the quick suite (CI) as well as the full one
+  std::function<CaseResult(const CaseOptions&)> run;
+};
+
+/// All registered cases, in name order.
+std::vector<CaseInfo>& case_registry();
+const CaseInfo* find_case(const std::string& name);
+
+struct CaseRegistrar {
+  explicit CaseRegistrar(CaseInfo info);
+};
+
+}  // namespace liquid::verification
+
+#define LIQUID_VERIFICATION_CASE_CAT2(a, b) a##b
+#define LIQUID_VERIFICATION_CASE_CAT(a, b) LIQUID_VERIFICATION_CASE_CAT2(a, b)
+/// Registers a case: LIQUID_VERIFICATION_CASE({"name", "summary", true, run_function});
+#define LIQUID_VERIFICATION_CASE(...)                                                        \
+  static const ::liquid::verification::CaseRegistrar LIQUID_VERIFICATION_CASE_CAT(registrar_, \
+                                                                                  __LINE__)(__VA_ARGS__)

@@ -1,0 +1,75 @@
+#include "record.hpp"
+
+#include <filesystem>
+#include <fstream>
+
+#include <fmt/format.h>
+
+#include "liquid/core/error.hpp"
+
+namespace liquid::verification {
+
+Json result_json(const std::string& name, const CaseResult& result, double seconds) {
+  Json j = Json::object();
+  j.set("case", name);
+  j.set("passed", result.passed);
+  j.set("seconds", seconds);
+  j.set("rows", result.tables.empty() ? Json::array() : result.tables.front().to_json());
+  Json tables = Json::array();
+  for (const auto& t : result.tables) {
+    Json tj = Json::object();
+    tj.set("title", t.title());
+    tj.set("rows", t.to_json());
+    tables.push(std::move(tj));
+  }
+  j.set("tables", std::move(tables));
+  Json failures = Json::array();
+  for (const auto& f : result.failures) failures.push(f);
+  j.set("failures", std::move(failures));
+  Json notes = Json::array();
+  for (const auto& n : result.notes) notes.push(n);
+  j.set("notes", std::move(notes));
+  // Case-specific top-level fields last (order, order_grad, ...).
+  if (const auto* fields = result.fields.items())
+    for (const auto& [key, value] : *fields) j.set(key, value);
+  return j;
+}
+
+std::string result_text(const std::string& name, const CaseResult& result, double seconds) {
+  std::string out = fmt::format("== {} ==\n", name);
+  for (const auto& t : result.tables) out += t.to_text() + "\n";
+  for (const auto& n : result.notes) out += "note: " + n + "\n";
+  for (const auto& f : result.failures) out += "FAILED: " + f + "\n";
+  out += fmt::format("{}: {} in {:.2f} s\n", name, result.passed ? "passed" : "FAILED", seconds);
+  return out;
+}
+
+std::string result_markdown(const std::string& name, const std::string& summary, const CaseResult& result,
+                            double seconds) {
+  std::string out = fmt::format("## `{}` — {}\n\n{}\n\n", name, result.passed ? "passed" : "FAILED", summary);
+  for (const auto& t : result.tables) out += t.to_markdown() + "\n";
+  for (const auto& n : result.notes) out += "- " + n + "\n";
+  for (const auto& f : result.failures) out += "- **failed:** " + f + "\n";
+  out += fmt::format("\nRun time: {:.2f} s.\n", seconds);
+  return out;
+}
+
+void write_file(const std::string& path, const std::string& text) {
+  namespace fs = std::filesystem;
+  const fs::path target(path);
+  std::error_code ec;
+  if (target.has_parent_path()) fs::create_directories(target.parent_path(), ec);
+  LIQUID_VERIFY(!ec, "cannot create the folder of '{}': {}", path, ec.message());
+  const fs::path tmp = target.string() + ".part";
+  {
+    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    LIQUID_VERIFY(out.good(), "cannot open '{}' for writing", tmp.string());
+    out << text;
+    out.flush();
+    LIQUID_VERIFY(out.good(), "writing '{}' failed (disk full?)", tmp.string());
+  }
+  fs::rename(tmp, target, ec);
+  LIQUID_VERIFY(!ec, "cannot move '{}' to '{}': {}", tmp.string(), path, ec.message());
+}
+
+}  // namespace liquid::verification
