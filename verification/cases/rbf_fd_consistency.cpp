@@ -209,6 +209,22 @@ CaseResult run(const CaseOptions&) {
       result.fields.set("headline", "2D tjunction stencil, PHS s=3, degree 2: order = Laplacian, "
                                     "order_grad = gradient");
     }
+  // Error series for the report's log-log plots (one plot per operator, the paper's s = 3).
+  Json series = Json::array();
+  for (const Op& op : ops)
+    for (const Study& st : studies) {
+      if (st.s != 3 || (op.shift < 0 && st.m == 1)) continue;
+      Json entry = Json::object();
+      entry.set("group", fmt::format("RBF-FD {}, PHS r^3", op.name));
+      entry.set("label", fmt::format("{}D {} m={}", st.dim, st.label, st.m));
+      Json hs = Json::array(), es = Json::array();
+      for (std::size_t j = 0; j < st.h.size(); ++j) hs.push(st.h[j]), es.push((st.*op.err)[j]);
+      entry.set("h", std::move(hs));
+      entry.set("error", std::move(es));
+      series.push(std::move(entry));
+    }
+  result.fields.set("series", std::move(series));
+
   double worst = 0.0;
   for (const Study& st : studies) worst = std::max(worst, st.worst_condition);
   result.fields.set("worst_condition", worst);

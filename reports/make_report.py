@@ -1,0 +1,99 @@
+#!/usr/bin/python3
+"""Builds the verification report from a suite's output folder.
+
+Usage: make_report.py DIR
+
+Reads DIR/summary.json and, for every case in it, DIR/<case>.json and DIR/<case>.md (written by
+`liquid-verify suite`). Writes DIR/README.md: a summary table, then every case's tables and notes,
+with a log-log plot (PNG) of every error series a case records under "series", drawn with a
+second-order reference slope.
+"""
+
+import json
+import math
+import pathlib
+import sys
+
+
+def plot_series(case, series, out_dir):
+    """One PNG per group of series; returns the file names written."""
+    try:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError:
+        print("make_report: matplotlib missing (ci/setup installs python3-matplotlib); no plots",
+              file=sys.stderr)
+        return []
+    groups = {}
+    for entry in series:
+        groups.setdefault(entry["group"], []).append(entry)
+    written = []
+    for index, (group, entries) in enumerate(groups.items()):
+        fig, ax = plt.subplots(figsize=(6.4, 4.8))
+        h_all, e_all = [], []
+        for entry in entries:
+            pts = [(h, e) for h, e in zip(entry["h"], entry["error"]) if h and e and e > 0]
+            if not pts:
+                continue
+            hs, es = zip(*pts)
+            ax.loglog(hs, es, marker="o", markersize=3, linewidth=1, label=entry["label"])
+            h_all += hs
+            e_all += es
+        if h_all:
+            h0, h1 = max(h_all), min(h_all)
+            e0 = math.exp(sum(math.log(e) for e in e_all) / len(e_all))
+            ax.loglog([h0, h1], [e0, e0 * (h1 / h0) ** 2], "k--", linewidth=1, label="slope 2")
+        ax.set_xlabel("h")
+        ax.set_ylabel("L-inf error")
+        ax.set_title(group, fontsize=10)
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=6, ncol=2)
+        name = f"{case}-{index}.png"
+        fig.tight_layout()
+        fig.savefig(out_dir / name, dpi=110)
+        plt.close(fig)
+        written.append(name)
+    return written
+
+
+def fmt(value):
+    if value is None:
+        return "-"
+    if isinstance(value, float):
+        return f"{value:.3f}"
+    return str(value)
+
+
+def main():
+    if len(sys.argv) != 2:
+        print(__doc__, file=sys.stderr)
+        return 2
+    out_dir = pathlib.Path(sys.argv[1])
+    summary_path = out_dir / "summary.json"
+    if not summary_path.exists():
+        print(f"make_report: {summary_path} not found; run liquid-verify suite first", file=sys.stderr)
+        return 2
+    summary = json.loads(summary_path.read_text())
+    lines = [f"# Verification report ({summary['suite']} suite)", ""]
+    lines += ["| case | result | seconds | order | order_grad |", "| --- | --- | ---: | ---: | ---: |"]
+    sections = []
+    for item in summary["cases"]:
+        name = item["case"]
+        record = json.loads((out_dir / f"{name}.json").read_text())
+        result = "passed" if record["passed"] else "**FAILED**"
+        lines.append(f"| [{name}](#{name}) | {result} | {record['seconds']:.2f} | "
+                     f"{fmt(record.get('order'))} | {fmt(record.get('order_grad'))} |")
+        body = (out_dir / f"{name}.md").read_text()
+        plots = plot_series(name, record.get("series", []), out_dir)
+        body += "".join(f"\n![{name} plot {i}]({p})\n" for i, p in enumerate(plots))
+        sections.append(f'<a id="{name}"></a>\n\n' + body)
+    lines.append("")
+    report = "\n".join(lines) + "\n" + "\n".join(sections)
+    (out_dir / "README.md").write_text(report)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
