@@ -33,8 +33,8 @@ void BM_WeightsUncached(benchmark::State& state) {
   std::vector<double> w;
   std::size_t i = 0;
   for (auto _ : state) {
-    const auto st = rbf::weights<Dim>(stencils[i++ % stencils.size()], Vec<Dim>::Zero(), rbf::Operator<Dim>::lap(),
-                                      rbf::Config{}, w);
+    const auto st = rbf::weights<Dim>(stencils[i++ % stencils.size()], Vec<Dim>::Zero(),
+                                      rbf::Operator<Dim>::lap(), rbf::Config{}, w);
     benchmark::DoNotOptimize(st);
     benchmark::DoNotOptimize(w.data());
   }
@@ -64,13 +64,15 @@ void BM_WeightsCached(benchmark::State& state) {
   std::size_t i = 0;
   for (auto _ : state) {
     const std::size_t k = i++ % stencils.size();
-    const auto st = cache.weights(stencils[k], centres[k], sizes[k], rbf::Operator<Dim>::lap(), rbf::Config{}, w);
+    const auto st =
+        cache.weights(stencils[k], centres[k], sizes[k], rbf::Operator<Dim>::lap(), rbf::Config{}, w);
     benchmark::DoNotOptimize(st);
     benchmark::DoNotOptimize(w.data());
   }
   state.SetItemsProcessed(state.iterations());
   state.counters["nodes"] = static_cast<double>(base.front().size());
-  state.counters["hit_rate"] = static_cast<double>(cache.hits()) / std::max(1L, cache.hits() + cache.misses());
+  state.counters["hit_rate"] =
+      static_cast<double>(cache.hits()) / std::max(1L, cache.hits() + cache.misses());
 }
 
 BENCHMARK(BM_WeightsUncached<2>)->Arg(9)->Arg(13)->Arg(17)->Arg(21)->Arg(25);

@@ -7,8 +7,8 @@
 // Exit codes: 0 every case met its expectations; 1 a case missed one; 2 bad input (the message
 // names it); 3 an unexpected internal error.
 
-#include <CLI/CLI.hpp>
 #include <fmt/format.h>
+#include <CLI/CLI.hpp>
 
 #include <cstdio>
 #include <iostream>
@@ -39,17 +39,20 @@ RunOutcome run_case(const lv::CaseInfo& info, const lv::CaseOptions& options, co
   std::fflush(stdout);
   RunOutcome outcome{result.passed, lv::result_json(info.name, result, seconds)};
   if (!json_path.empty()) lv::write_file(json_path, outcome.json.dump() + "\n");
-  if (!md_path.empty()) lv::write_file(md_path, lv::result_markdown(info.name, info.summary, result, seconds));
+  if (!md_path.empty())
+    lv::write_file(md_path, lv::result_markdown(info.name, info.summary, result, seconds));
   return outcome;
 }
 
 void parse_levels(const std::string& text, lv::CaseOptions& options) {
   std::smatch m;
   static const std::regex pattern(R"(^\s*(\d+)\s*:\s*(\d+)\s*$)");
-  LIQUID_VERIFY(std::regex_match(text, m, pattern), "--levels expects A:B with integers A <= B, got '{}'", text);
+  LIQUID_VERIFY(std::regex_match(text, m, pattern), "--levels expects A:B with integers A <= B, got '{}'",
+                text);
   options.level_min = std::stoi(m[1]);
   options.level_max = std::stoi(m[2]);
-  LIQUID_VERIFY(*options.level_min <= *options.level_max, "--levels {}: the first level exceeds the last", text);
+  LIQUID_VERIFY(*options.level_min <= *options.level_max, "--levels {}: the first level exceeds the last",
+                text);
 }
 
 }  // namespace
@@ -92,7 +95,8 @@ int main(int argc, char** argv) {
     }
     if (*run) {
       const lv::CaseInfo* info = lv::find_case(case_name);
-      LIQUID_VERIFY(info != nullptr, "no verification case named '{}' (liquid-verify list shows them)", case_name);
+      LIQUID_VERIFY(info != nullptr, "no verification case named '{}' (liquid-verify list shows them)",
+                    case_name);
       lv::CaseOptions options;
       if (!levels.empty()) parse_levels(levels, options);
       if (max_jump >= 0) options.max_jump = max_jump;
@@ -114,7 +118,8 @@ int main(int argc, char** argv) {
         if (!is_full && !c.quick) continue;
         lv::CaseOptions options;
         options.full = is_full;
-        const auto outcome = run_case(c, options, out_dir + "/" + c.name + ".json", out_dir + "/" + c.name + ".md");
+        const auto outcome =
+            run_case(c, options, out_dir + "/" + c.name + ".json", out_dir + "/" + c.name + ".md");
         ++n_run;
         n_failed += outcome.passed ? 0 : 1;
         lv::Json entry = lv::Json::object();

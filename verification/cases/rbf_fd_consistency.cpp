@@ -6,8 +6,8 @@
 //   - "jittered": a Cartesian grid of spacing h with every node but the centre moved by up to 0.35 h,
 //   - "tjunction": cell centres of a small non-graded tree (neighbours kept, split once or twice),
 // each cut to the 2 M + 1 nodes nearest the centre (M = number of polynomial terms; the engine's own
-// stencil-growing rule), eight random stencils of each kind (errors are the L-inf over them), we compute weights for the value at an off-node point, the gradient and
-// the Laplacian at the centre node, and check
+// stencil-growing rule), eight random stencils of each kind (errors are the L-inf over them), we compute
+// weights for the value at an off-node point, the gradient and the Laplacian at the centre node, and check
 //   (a) polynomials of degree <= m are reproduced to round-off (relative to the operator's scale);
 //   (b) for f(x) = exp(a.x) sin(b.x + 0.3), errors shrink with the stencil scale h at the orders
 //       m + 1 (value), m (gradient) and m - 1 (Laplacian), for h = 0.1 * 2^-j, j = 0..5.
@@ -65,10 +65,10 @@ template <int Dim>
 std::vector<Vec<Dim>> unit_stencil(const std::string& kind, int degree, unsigned seed) {
   std::vector<Vec<Dim>> all = kind == "jittered" ? jittered_stencil<Dim>(Dim == 2 ? 4 : 2, 1.0, 0.35, seed)
                                                  : quadtree_stencil<Dim>(Dim == 2 ? 3 : 2, 1.0, seed);
-  std::stable_sort(all.begin(), all.end(), [](const Vec<Dim>& p, const Vec<Dim>& q) {
-    return p.squaredNorm() < q.squaredNorm();
-  });
-  const std::size_t n = std::min(all.size(), static_cast<std::size_t>(2 * rbf::n_polynomial_terms(Dim, degree) + 1));
+  std::stable_sort(all.begin(), all.end(),
+                   [](const Vec<Dim>& p, const Vec<Dim>& q) { return p.squaredNorm() < q.squaredNorm(); });
+  const std::size_t n =
+      std::min(all.size(), static_cast<std::size_t>(2 * rbf::n_polynomial_terms(Dim, degree) + 1));
   all.resize(n);
   return all;
 }
@@ -125,7 +125,8 @@ Study run_study(const std::string& kind, int s, int m) {
         return st;
       }
       st.degree_used = std::min(st.degree_used, at_centre.status.degree_used);
-      st.worst_condition = std::max({st.worst_condition, at_centre.status.condition, at_off.status.condition});
+      st.worst_condition =
+          std::max({st.worst_condition, at_centre.status.condition, at_off.status.condition});
 
       Eigen::VectorXd fv(nodes.size());
       for (std::size_t i = 0; i < nodes.size(); ++i) fv[i] = f.value(nodes[i]);
@@ -147,7 +148,8 @@ Study run_study(const std::string& kind, int s, int m) {
         double e = std::abs(at_off.w.col(0).dot(po) - basis.value(t, zero));
         for (int k = 0; k < Dim; ++k)
           e = std::max(e, h * std::abs(at_centre.w.col(1 + k).dot(pc) - basis.derivative(t, k, zero) / h));
-        e = std::max(e, h * h * std::abs(at_centre.w.col(Dim + 1).dot(pc) - basis.laplacian(t, zero) / (h * h)));
+        e = std::max(e,
+                     h * h * std::abs(at_centre.w.col(Dim + 1).dot(pc) - basis.laplacian(t, zero) / (h * h)));
         st.reproduction = std::max(st.reproduction, e);
       }
     }
@@ -163,11 +165,13 @@ CaseResult run(const CaseOptions&) {
         studies.push_back(run_study<2>(kind, s, m));
         studies.push_back(run_study<3>(kind, s, m));
       }
-  std::stable_sort(studies.begin(), studies.end(), [](const Study& a, const Study& b) { return a.dim < b.dim; });
+  std::stable_sort(studies.begin(), studies.end(),
+                   [](const Study& a, const Study& b) { return a.dim < b.dim; });
 
   CaseResult result;
-  const std::vector<std::string> columns{"dim", "stencil", "s", "m", "nodes", "reproduction",
-                                         "err(h=0.1)", "err(h=0.003125)", "order", "expected", "check"};
+  const std::vector<std::string> columns{"dim",   "stencil",      "s",          "m",
+                                         "nodes", "reproduction", "err(h=0.1)", "err(h=0.003125)",
+                                         "order", "expected",     "check"};
   struct Op {
     const char* name;
     std::vector<double> Study::*err;
@@ -181,7 +185,8 @@ CaseResult run(const CaseOptions&) {
     for (const Study& st : studies) {
       const std::string where = fmt::format("{}D {} s={} m={}", st.dim, st.label, st.s, st.m);
       if (st.degree_used != st.m) {
-        result.expect(false, fmt::format("{}: weights unusable or degree lowered to {}", where, st.degree_used));
+        result.expect(false,
+                      fmt::format("{}: weights unusable or degree lowered to {}", where, st.degree_used));
         continue;
       }
       const auto& err = st.*op.err;
@@ -191,8 +196,8 @@ CaseResult run(const CaseOptions&) {
       const bool ok = !checked || order >= expected - order_slack;
       result.expect(st.reproduction < reproduction_tolerance,
                     fmt::format("{}: polynomial reproduction error {:.2e}", where, st.reproduction));
-      result.expect(ok, fmt::format("{} {}: observed order {:.2f} below {} - {}", where, op.name, order, expected,
-                                    order_slack));
+      result.expect(ok, fmt::format("{} {}: observed order {:.2f} below {} - {}", where, op.name, order,
+                                    expected, order_slack));
       table.add_row({long(st.dim), st.label, long(st.s), long(st.m), long(st.n_nodes), st.reproduction,
                      err.front(), err.back(), order,
                      checked ? Table::Cell(long(expected)) : Table::Cell(std::string("n/a")),
@@ -206,8 +211,9 @@ CaseResult run(const CaseOptions&) {
     if (st.dim == 2 && st.label == "tjunction" && st.s == 3 && st.m == 2) {
       result.fields.set("order", asymptotic_order(st.h, st.err_lap, 2));
       result.fields.set("order_grad", asymptotic_order(st.h, st.err_grad, 1));
-      result.fields.set("headline", "2D tjunction stencil, PHS s=3, degree 2: order = Laplacian, "
-                                    "order_grad = gradient");
+      result.fields.set("headline",
+                        "2D tjunction stencil, PHS s=3, degree 2: order = Laplacian, "
+                        "order_grad = gradient");
     }
   // Error series for the report's log-log plots (one plot per operator, the paper's s = 3).
   Json series = Json::array();
@@ -228,17 +234,18 @@ CaseResult run(const CaseOptions&) {
   double worst = 0.0;
   for (const Study& st : studies) worst = std::max(worst, st.worst_condition);
   result.fields.set("worst_condition", worst);
-  result.notes.push_back(fmt::format("worst estimated condition number of a scaled saddle-point system: {:.2e}",
-                                     worst));
-  result.notes.push_back("the Laplacian with m = 1 cannot be consistent (quadratics are not reproduced); "
-                         "its row is informative only");
+  result.notes.push_back(
+      fmt::format("worst estimated condition number of a scaled saddle-point system: {:.2e}", worst));
+  result.notes.push_back(
+      "the Laplacian with m = 1 cannot be consistent (quadratics are not reproduced); "
+      "its row is informative only");
   return result;
 }
 
 }  // namespace
 
-LIQUID_VERIFICATION_CASE({"rbf-fd-consistency",
-                          "RBF-FD weights: polynomial reproduction and convergence orders, 2D/3D, s=3,5,7, m=1..4",
-                          true, run});
+LIQUID_VERIFICATION_CASE(
+    {"rbf-fd-consistency",
+     "RBF-FD weights: polynomial reproduction and convergence orders, 2D/3D, s=3,5,7, m=1..4", true, run});
 
 }  // namespace liquid::verification

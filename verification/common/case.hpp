@@ -57,6 +57,6 @@ struct CaseRegistrar {
 #define LIQUID_VERIFICATION_CASE_CAT2(a, b) a##b
 #define LIQUID_VERIFICATION_CASE_CAT(a, b) LIQUID_VERIFICATION_CASE_CAT2(a, b)
 /// Registers a case: LIQUID_VERIFICATION_CASE({"name", "summary", true, run_function});
-#define LIQUID_VERIFICATION_CASE(...)                                                        \
+#define LIQUID_VERIFICATION_CASE(...)                                                         \
   static const ::liquid::verification::CaseRegistrar LIQUID_VERIFICATION_CASE_CAT(registrar_, \
                                                                                   __LINE__)(__VA_ARGS__)

@@ -66,10 +66,14 @@ Json Table::to_json() const {
     Json r = Json::object();
     for (std::size_t c = 0; c < columns_.size(); ++c) {
       const Table::Cell& cell = row[c];
-      if (std::holds_alternative<std::monostate>(cell)) r.set(columns_[c], nullptr);
-      else if (const long* i = std::get_if<long>(&cell)) r.set(columns_[c], *i);
-      else if (const double* d = std::get_if<double>(&cell)) r.set(columns_[c], *d);
-      else r.set(columns_[c], std::get<std::string>(cell));
+      if (std::holds_alternative<std::monostate>(cell))
+        r.set(columns_[c], nullptr);
+      else if (const long* i = std::get_if<long>(&cell))
+        r.set(columns_[c], *i);
+      else if (const double* d = std::get_if<double>(&cell))
+        r.set(columns_[c], *d);
+      else
+        r.set(columns_[c], std::get<std::string>(cell));
     }
     rows.push(std::move(r));
   }

@@ -25,8 +25,8 @@ namespace detail {
 
 }  // namespace liquid
 
-#define LIQUID_VERIFY(cond, ...)                                               \
-  do {                                                                         \
+#define LIQUID_VERIFY(cond, ...)                                                       \
+  do {                                                                                 \
     if (!(cond)) ::liquid::detail::fail(__FILE__, __LINE__, fmt::format(__VA_ARGS__)); \
   } while (false)
 

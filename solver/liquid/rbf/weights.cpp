@@ -11,12 +11,18 @@ namespace liquid::rbf {
 
 const char* to_string(Info info) {
   switch (info) {
-    case Info::ok: return "ok";
-    case Info::degree_reduced: return "degree_reduced";
-    case Info::empty_stencil: return "empty_stencil";
-    case Info::coincident_nodes: return "coincident_nodes";
-    case Info::singular_system: return "singular_system";
-    case Info::non_finite: return "non_finite";
+    case Info::ok:
+      return "ok";
+    case Info::degree_reduced:
+      return "degree_reduced";
+    case Info::empty_stencil:
+      return "empty_stencil";
+    case Info::coincident_nodes:
+      return "coincident_nodes";
+    case Info::singular_system:
+      return "singular_system";
+    case Info::non_finite:
+      return "non_finite";
   }
   return "unknown";
 }

@@ -48,11 +48,11 @@ struct Operator {
 
 /// Choices of the discretisation; defaults are the paper's operator settings.
 struct Config {
-  int exponent = 3;                 ///< PHS exponent s (odd, 1..9)
-  int degree = 2;                   ///< requested total degree of the appended polynomials (0..4)
-  double rank_tolerance = 1e-9;     ///< relative threshold of the rank test on the polynomial block
+  int exponent = 3;                     ///< PHS exponent s (odd, 1..9)
+  int degree = 2;                       ///< requested total degree of the appended polynomials (0..4)
+  double rank_tolerance = 1e-9;         ///< relative threshold of the rank test on the polynomial block
   double coincidence_tolerance = 1e-9;  ///< nodes closer than this times R are coincident
-  double max_condition = 1e14;      ///< estimated condition number past which a system is refused
+  double max_condition = 1e14;          ///< estimated condition number past which a system is refused
 };
 
 enum class Info {
@@ -72,9 +72,9 @@ struct Status {
   int n_nodes = 0;
   int degree_requested = 0;
   int degree_used = -1;
-  double condition = 0.0;        ///< estimate |R_11 / R_kk| of the pivoted QR of the scaled system
+  double condition = 0.0;         ///< estimate |R_11 / R_kk| of the pivoted QR of the scaled system
   bool laplacian_defined = true;  ///< false for s = 1 with a node on the evaluation point
-  int node_a = -1, node_b = -1;  ///< the offending pair for coincident_nodes
+  int node_a = -1, node_b = -1;   ///< the offending pair for coincident_nodes
 
   bool usable() const { return info == Info::ok || info == Info::degree_reduced; }
   /// One line for logs and error messages.

@@ -36,7 +36,7 @@ TEST(RbfInterpolant, InterpolatesAtNodesAndReproducesQuadratics3D) {
 TEST(RbfInterpolant, ErrorsAreExplicit) {
   const auto nodes = verification::jittered_stencil<2>(1, 0.1, 0.2, 1u);
   Interpolant<2> interp(nodes, Config{5, 2});
-  EXPECT_THROW(interp.value(Vec<2>::Zero()), Error);  // not fitted
+  EXPECT_THROW(interp.value(Vec<2>::Zero()), Error);             // not fitted
   EXPECT_THROW(interp.fit(Eigen::MatrixXd::Zero(3, 1)), Error);  // wrong row count
   Interpolant<2> empty(std::vector<Vec<2>>{}, Config{});
   EXPECT_EQ(empty.status().info, Info::empty_stencil);

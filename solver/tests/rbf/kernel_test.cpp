@@ -8,7 +8,9 @@ namespace liquid::rbf {
 namespace {
 
 template <int Dim>
-double phs_at(const Phs& k, const Vec<Dim>& x) { return k.value(x.norm()); }
+double phs_at(const Phs& k, const Vec<Dim>& x) {
+  return k.value(x.norm());
+}
 
 template <int Dim>
 void check_kernel_derivatives(int s) {
@@ -24,8 +26,8 @@ void check_kernel_derivatives(int s) {
     xpp[k] += 2 * e;
     xmm[k] -= 2 * e;
     // Fourth-order central difference, so the reference's own error is far below the tolerance.
-    const double d_fd = (-phs_at<Dim>(kernel, xpp) + 8 * phs_at<Dim>(kernel, xp) - 8 * phs_at<Dim>(kernel, xm) +
-                         phs_at<Dim>(kernel, xmm)) /
+    const double d_fd = (-phs_at<Dim>(kernel, xpp) + 8 * phs_at<Dim>(kernel, xp) -
+                         8 * phs_at<Dim>(kernel, xm) + phs_at<Dim>(kernel, xmm)) /
                         (12 * e);
     EXPECT_NEAR(kernel.gradient_factor(x.norm()) * x[k], d_fd, 1e-9) << "s=" << s << " k=" << k;
     lap_fd += (phs_at<Dim>(kernel, xp) - 2 * phs_at<Dim>(kernel, x) + phs_at<Dim>(kernel, xm)) / (e * e);
