@@ -1,0 +1,64 @@
+#pragma once
+// Sparse linear solvers for the pressure Poisson equation, behind one interface so that a
+// distributed engine can sit behind it later. Every solve returns its statistics; not converging
+// is a reported result (info, iterations, residual reached), never a silent one.
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Eigen/SparseCore>
+
+namespace liquid::linalg {
+
+using SparseMatrix = Eigen::SparseMatrix<double, Eigen::RowMajor>;
+using Vector = Eigen::VectorXd;
+
+enum class SolverKind {
+  bicgstab_jacobi,  ///< the paper's: BiCGSTAB with a diagonal preconditioner
+  bicgstab_ilut,    ///< BiCGSTAB with incomplete LU (threshold)
+  cg_ic,            ///< conjugate gradients with incomplete Cholesky (symmetric matrices only)
+  cg_jacobi,        ///< conjugate gradients with a diagonal preconditioner (symmetric only)
+  direct,           ///< sparse LU, for checks
+};
+
+/// "bicgstab-jacobi", "bicgstab-ilut", "cg-ic", "cg-jacobi", "direct". Throws naming the choices.
+SolverKind parse_solver(const std::string& name);
+std::string to_string(SolverKind kind);
+std::vector<std::string> solver_names();
+
+struct SolveOptions {
+  SolverKind kind = SolverKind::bicgstab_jacobi;
+  double tolerance = 1e-10;  ///< relative residual |b - A x| / |b| to reach
+  int max_iterations = 20000;
+};
+
+enum class SolveInfo { converged, not_converged, setup_failed, non_finite };
+const char* to_string(SolveInfo info);
+
+struct SolveStats {
+  SolveInfo info = SolveInfo::converged;
+  std::string solver;
+  int iterations = 0;
+  double relative_residual = 0.0;  ///< true |b - A x| / |b| after the solve
+  double setup_seconds = 0.0;
+  double solve_seconds = 0.0;
+  long n_unknowns = 0;
+
+  bool converged() const { return info == SolveInfo::converged; }
+  std::string describe() const;
+};
+
+class LinearSolver {
+ public:
+  virtual ~LinearSolver() = default;
+  /// Solves A x = b; x holds the initial guess on entry (resized to zero if its size differs).
+  virtual SolveStats solve(const SparseMatrix& A, const Vector& b, Vector& x) = 0;
+};
+
+std::unique_ptr<LinearSolver> make_solver(const SolveOptions& options);
+
+/// Convenience: make_solver(options)->solve(A, b, x).
+SolveStats solve(const SparseMatrix& A, const Vector& b, Vector& x, const SolveOptions& options);
+
+}  // namespace liquid::linalg
