@@ -1,0 +1,169 @@
+#include "liquid/io/tree_output.hpp"
+
+#include <fmt/format.h>
+#include <hdf5.h>
+
+#include <cctype>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+
+#include "liquid/core/error.hpp"
+
+namespace liquid::io {
+
+namespace {
+
+/// Silences HDF5's own error printing while alive (our checks report failures), then restores it.
+class QuietHdf5 {
+ public:
+  QuietHdf5() {
+    H5Eget_auto2(H5E_DEFAULT, &func_, &data_);
+    H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  }
+  ~QuietHdf5() { H5Eset_auto2(H5E_DEFAULT, func_, data_); }
+  QuietHdf5(const QuietHdf5&) = delete;
+  QuietHdf5& operator=(const QuietHdf5&) = delete;
+
+ private:
+  H5E_auto2_t func_ = nullptr;
+  void* data_ = nullptr;
+};
+
+/// Closes an HDF5 handle on scope exit.
+class Handle {
+ public:
+  Handle(hid_t id, herr_t (*close)(hid_t)) : id_(id), close_(close) {}
+  ~Handle() {
+    if (id_ >= 0) close_(id_);
+  }
+  Handle(const Handle&) = delete;
+  Handle& operator=(const Handle&) = delete;
+  hid_t get() const { return id_; }
+  bool ok() const { return id_ >= 0; }
+
+ private:
+  hid_t id_;
+  herr_t (*close_)(hid_t);
+};
+
+void write_dataset(hid_t where, const std::string& name, hid_t mem_type, hid_t file_type, std::vector<hsize_t> dims,
+                   const void* data, const std::string& path) {
+  Handle space(H5Screate_simple(static_cast<int>(dims.size()), dims.data(), nullptr), H5Sclose);
+  LIQUID_VERIFY(space.ok(), "write_tree: cannot make the dataspace of {} in {}", name, path);
+  Handle set(H5Dcreate2(where, name.c_str(), file_type, space.get(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Dclose);
+  LIQUID_VERIFY(set.ok(), "write_tree: cannot create dataset {} in {}", name, path);
+  LIQUID_VERIFY(H5Dwrite(set.get(), mem_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data) >= 0,
+                "write_tree: cannot write dataset {} in {}", name, path);
+}
+
+bool valid_name(const std::string& name) {
+  if (name.empty() || name == "level" || name == "cell_id") return false;
+  for (char ch : name)
+    if (!(std::isalnum(static_cast<unsigned char>(ch)) || ch == '_' || ch == '-' || ch == '.')) return false;
+  return true;
+}
+
+/// Corner k of a cell in XDMF/VTK order, as offsets (0 or 1) per axis.
+template <int Dim>
+int corner_bit(int k, int d) {
+  static constexpr int quad[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+  if (d < 2) return quad[k % 4][d];
+  return k / 4;
+}
+
+std::string data_item(const std::string& dims, const char* type, int precision, const std::string& ref) {
+  return fmt::format(R"(<DataItem Dimensions="{}" NumberType="{}" Precision="{}" Format="HDF">{}</DataItem>)", dims,
+                     type, precision, ref);
+}
+
+}  // namespace
+
+template <int Dim>
+TreeFiles write_tree(const std::string& stem, const CellGraph<Dim>& graph, std::span<const CellField> fields) {
+  constexpr int n_corners = 1 << Dim;
+  for (const CellField& f : fields) {
+    LIQUID_VERIFY(valid_name(f.name),
+                  "write_tree: field name '{}' must be non-empty, not 'level' or 'cell_id', and use only letters, "
+                  "digits, '_', '-', '.'",
+                  f.name);
+    LIQUID_VERIFY(f.values.size() >= static_cast<std::size_t>(graph.cell_capacity()),
+                  "write_tree: field '{}' has {} values but the graph's cell ids go up to {}", f.name, f.values.size(),
+                  graph.cell_capacity() - 1);
+  }
+  const TreeFiles files{stem + ".h5", stem + ".xmf"};
+  const std::vector<CellId> ids = graph.cell_ids();
+  const auto n = static_cast<hsize_t>(ids.size());
+
+  std::vector<double> geometry(n * n_corners * Dim);
+  std::vector<std::int64_t> topology(n * n_corners);
+  std::vector<std::int32_t> level(n), cell_id(n);
+#pragma omp parallel for schedule(static) if (static_cast<long>(n) > detail::parallel_min)
+  for (long i = 0; i < static_cast<long>(n); ++i) {
+    const Box<Dim> b = graph.box(ids[i]);
+    for (int k = 0; k < n_corners; ++k) {
+      const std::size_t p = static_cast<std::size_t>(i) * n_corners + k;
+      topology[p] = static_cast<std::int64_t>(p);
+      for (int d = 0; d < Dim; ++d) geometry[p * Dim + d] = corner_bit<Dim>(k, d) ? b.hi[d] : b.lo[d];
+    }
+    level[i] = graph.level(ids[i]);
+    cell_id[i] = ids[i];
+  }
+
+  const std::string h5_tmp = files.h5 + ".tmp", xmf_tmp = files.xmf + ".tmp";
+  {
+    QuietHdf5 quiet;
+    Handle file(H5Fcreate(h5_tmp.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT), H5Fclose);
+    LIQUID_VERIFY(file.ok(), "write_tree: cannot create {} (does its folder exist and is it writable?)", h5_tmp);
+    write_dataset(file.get(), "geometry", H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE, {n * n_corners, Dim}, geometry.data(), h5_tmp);
+    write_dataset(file.get(), "topology", H5T_NATIVE_INT64, H5T_STD_I64LE, {n, n_corners}, topology.data(), h5_tmp);
+    write_dataset(file.get(), "level", H5T_NATIVE_INT32, H5T_STD_I32LE, {n}, level.data(), h5_tmp);
+    write_dataset(file.get(), "cell_id", H5T_NATIVE_INT32, H5T_STD_I32LE, {n}, cell_id.data(), h5_tmp);
+    if (!fields.empty()) {
+      Handle group(H5Gcreate2(file.get(), "fields", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Gclose);
+      LIQUID_VERIFY(group.ok(), "write_tree: cannot create group /fields in {}", h5_tmp);
+      std::vector<double> values(n);
+      for (const CellField& f : fields) {
+        for (hsize_t i = 0; i < n; ++i) values[i] = f.values[ids[i]];
+        write_dataset(group.get(), f.name, H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE, {n}, values.data(), h5_tmp);
+      }
+    }
+    LIQUID_VERIFY(H5Fflush(file.get(), H5F_SCOPE_GLOBAL) >= 0, "write_tree: cannot flush {}", h5_tmp);
+  }
+
+  const std::string h5_name = std::filesystem::path(files.h5).filename().string();
+  const std::string cells = std::to_string(n);
+  std::string xmf;
+  xmf += "<?xml version=\"1.0\" ?>\n<!DOCTYPE Xdmf SYSTEM \"Xdmf.dtd\" []>\n<Xdmf Version=\"3.0\">\n  <Domain>\n";
+  xmf += fmt::format("    <Grid Name=\"cellgraph{}d\" GridType=\"Uniform\">\n", Dim);
+  xmf += fmt::format("      <Topology TopologyType=\"{}\" NumberOfElements=\"{}\">\n        {}\n      </Topology>\n",
+                     Dim == 2 ? "Quadrilateral" : "Hexahedron", cells,
+                     data_item(fmt::format("{} {}", cells, n_corners), "Int", 8, h5_name + ":/topology"));
+  xmf += fmt::format("      <Geometry GeometryType=\"{}\">\n        {}\n      </Geometry>\n", Dim == 2 ? "XY" : "XYZ",
+                     data_item(fmt::format("{} {}", n * n_corners, Dim), "Float", 8, h5_name + ":/geometry"));
+  const auto attribute = [&](const std::string& name, const char* type, int precision, const std::string& path) {
+    xmf += fmt::format("      <Attribute Name=\"{}\" AttributeType=\"Scalar\" Center=\"Cell\">\n        {}\n      </Attribute>\n",
+                       name, data_item(cells, type, precision, h5_name + ":" + path));
+  };
+  attribute("level", "Int", 4, "/level");
+  attribute("cell_id", "Int", 4, "/cell_id");
+  for (const CellField& f : fields) attribute(f.name, "Float", 8, "/fields/" + f.name);
+  xmf += "    </Grid>\n  </Domain>\n</Xdmf>\n";
+  {
+    std::ofstream out(xmf_tmp, std::ios::trunc);
+    out << xmf;
+    out.close();
+    LIQUID_VERIFY(out.good(), "write_tree: cannot write {}", xmf_tmp);
+  }
+  std::error_code ec;
+  std::filesystem::rename(h5_tmp, files.h5, ec);
+  LIQUID_VERIFY(!ec, "write_tree: cannot rename {} to {}: {}", h5_tmp, files.h5, ec.message());
+  std::filesystem::rename(xmf_tmp, files.xmf, ec);
+  LIQUID_VERIFY(!ec, "write_tree: cannot rename {} to {}: {}", xmf_tmp, files.xmf, ec.message());
+  return files;
+}
+
+template TreeFiles write_tree<2>(const std::string&, const CellGraph<2>&, std::span<const CellField>);
+template TreeFiles write_tree<3>(const std::string&, const CellGraph<3>&, std::span<const CellField>);
+
+}  // namespace liquid::io

@@ -1,0 +1,188 @@
+// Tree builders: uniform counts, bands around a level set at the right levels, one-level shifts
+// for convergence rows, seeded random trees under each jump limit, and narrow-band re-adaptation
+// by mark + adapt reaching the tree a fresh build gives.
+#include <gtest/gtest.h>
+
+#include <set>
+
+#include "liquid/tree/builders.hpp"
+
+namespace liquid {
+namespace {
+
+template <int Dim>
+tree::LevelSet<Dim> sphere(const Vec<Dim>& centre, double radius) {
+  return [centre, radius](const Vec<Dim>& x) { return (x - centre).norm() - radius; };
+}
+
+/// True when phi changes sign over the corners of c's box (so the zero set crosses the cell).
+template <int Dim>
+bool crosses(const CellGraph<Dim>& g, CellId c, const tree::LevelSet<Dim>& phi) {
+  const Box<Dim> b = g.box(c);
+  bool neg = false, pos = false;
+  for (int k = 0; k < (1 << Dim); ++k) {
+    Vec<Dim> x;
+    for (int d = 0; d < Dim; ++d) x[d] = (k >> d) & 1 ? b.hi[d] : b.lo[d];
+    (phi(x) < 0 ? neg : pos) = true;
+  }
+  return neg && pos;
+}
+
+template <int Dim>
+std::set<std::uint64_t> leaf_set(const CellGraph<Dim>& g) {
+  std::set<std::uint64_t> out;
+  g.for_each_cell([&](CellId c) { out.insert(g.key(c)); });
+  return out;
+}
+
+template <typename T>
+class BuildersTest : public ::testing::Test {};
+using Dims = ::testing::Types<std::integral_constant<int, 2>, std::integral_constant<int, 3>>;
+TYPED_TEST_SUITE(BuildersTest, Dims);
+
+TYPED_TEST(BuildersTest, UniformCounts) {
+  constexpr int Dim = TypeParam::value;
+  const int level = Dim == 2 ? 4 : 3;
+  const auto g = tree::uniform<Dim>(Box<Dim>{}, level);
+  const long n = 1L << level;
+  long side = 1;
+  for (int d = 0; d < Dim - 1; ++d) side *= n;
+  EXPECT_EQ(g.n_cells(), side * n);
+  EXPECT_EQ(g.n_faces(), Dim * side * (n - 1) + 2 * Dim * side);
+  EXPECT_EQ(g.deepest_level(), level);
+  EXPECT_TRUE(g.check_invariants().ok());
+  // Face geometry: boundary faces cover the domain's surface; interior faces of one axis cover
+  // n - 1 cross-sections.
+  std::vector<Vec<Dim>> centres;
+  std::vector<double> areas;
+  g.face_geometry(centres, areas);
+  double boundary = 0.0, inner0 = 0.0;
+  g.for_each_face([&](FaceId f) {
+    const GraphFace& face = g.face(f);
+    if (face.is_boundary()) {
+      boundary += areas[f];
+      EXPECT_TRUE(centres[f][face.axis] == 0.0 || centres[f][face.axis] == 1.0);
+    } else if (face.axis == 0) {
+      inner0 += areas[f];
+    }
+  });
+  EXPECT_NEAR(boundary, 2.0 * Dim, 1e-12);
+  EXPECT_NEAR(inner0, static_cast<double>(n - 1), 1e-12);
+}
+
+TYPED_TEST(BuildersTest, BandedRefinesAroundTheZeroSet) {
+  constexpr int Dim = TypeParam::value;
+  const auto phi = sphere<Dim>(Vec<Dim>::Constant(0.45), 0.3);
+  long previous_fine = 0;
+  for (int row = 0; row < 2; ++row) {
+    const int level = (Dim == 2 ? 3 : 2) + row;
+    const auto g = tree::banded<Dim>(Box<Dim>{}, phi, level, 2.0);
+    const InvariantReport r = g.check_invariants();
+    ASSERT_TRUE(r.ok()) << r.text();
+    g.for_each_cell([&](CellId c) {
+      EXPECT_GE(g.level(c), level);
+      EXPECT_LE(g.level(c), level + 2);
+      if (crosses(g, c, phi)) {
+        EXPECT_EQ(g.level(c), level + 2);
+      }
+    });
+    const long fine = g.n_cells_at_level(level + 2);
+    EXPECT_GT(fine, 0);
+    EXPECT_GT(g.n_cells_at_level(level + 1), 0);
+    if (previous_fine > 0) {
+      // One level deeper: the band's cell count grows like 2^(Dim-1).
+      const double ratio = static_cast<double>(fine) / previous_fine;
+      EXPECT_GT(ratio, 0.6 * (1 << (Dim - 1)));
+      EXPECT_LT(ratio, 1.6 * (1 << (Dim - 1)));
+    }
+    previous_fine = fine;
+  }
+}
+
+TYPED_TEST(BuildersTest, NarrowBandUnderEachJump) {
+  constexpr int Dim = TypeParam::value;
+  const auto phi = sphere<Dim>(Vec<Dim>::Constant(0.5), 0.31);
+  const int fine = Dim == 2 ? 7 : 5;
+  for (int jump : {1, 2, unlimited_jump}) {
+    CellGraphOptions<Dim> options;
+    options.max_jump = jump;
+    const auto g = tree::narrow_band<Dim>(Box<Dim>{}, phi, 1, fine, 2.0, options);
+    const InvariantReport r = g.check_invariants();
+    ASSERT_TRUE(r.ok()) << r.text();
+    int coarsest = fine;
+    g.for_each_cell([&](CellId c) {
+      coarsest = std::min(coarsest, g.level(c));
+      if (crosses(g, c, phi)) {
+        EXPECT_EQ(g.level(c), fine);
+      }
+    });
+    // The sphere crosses every level-1 cell; away from it the tree is as coarse as the jump allows.
+    if (jump == unlimited_jump) {
+      EXPECT_EQ(coarsest, 2);
+    } else {
+      EXPECT_LE(coarsest, fine - 2);
+    }
+  }
+}
+
+TYPED_TEST(BuildersTest, RandomTreesAreSeededAndRespectTheJump) {
+  constexpr int Dim = TypeParam::value;
+  const int deep = Dim == 2 ? 9 : 6;
+  for (int jump : {1, 2, 3, 4, unlimited_jump}) {
+    CellGraphOptions<Dim> options;
+    options.max_jump = jump;
+    const auto a = tree::random<Dim>(Box<Dim>{}, 42, 1, deep, 0.35, options);
+    const auto b = tree::random<Dim>(Box<Dim>{}, 42, 1, deep, 0.35, options);
+    const auto c = tree::random<Dim>(Box<Dim>{}, 43, 1, deep, 0.35, options);
+    EXPECT_EQ(leaf_set(a), leaf_set(b));
+    EXPECT_NE(leaf_set(a), leaf_set(c));
+    const InvariantReport r = a.check_invariants();
+    ASSERT_TRUE(r.ok()) << r.text();
+    int worst = 0;
+    a.for_each_face([&](FaceId f) {
+      const GraphFace& face = a.face(f);
+      if (!face.is_boundary()) worst = std::max(worst, std::abs(face.side_level[0] - face.side_level[1]));
+    });
+    EXPECT_LE(worst, jump);
+    EXPECT_GE(worst, std::min(jump, 2)) << "jump limit " << jump << ": no non-graded configuration";
+  }
+}
+
+TYPED_TEST(BuildersTest, NarrowBandReadaptationReachesAFreshBuild) {
+  constexpr int Dim = TypeParam::value;
+  const int fine = Dim == 2 ? 7 : 5;
+  const double h = std::ldexp(1.0, -fine);
+  for (int jump : {2, unlimited_jump}) {
+    CellGraphOptions<Dim> options;
+    options.max_jump = jump;
+    Vec<Dim> centre = Vec<Dim>::Constant(0.5);
+    auto g = tree::narrow_band<Dim>(Box<Dim>{}, sphere<Dim>(centre, 0.3), 1, fine, 2.0, options);
+    centre[0] += h;  // the interface moves by one fine cell
+    const auto phi = sphere<Dim>(centre, 0.3);
+    std::vector<Mark> marks;
+    int rounds = 0;
+    for (; rounds < 10; ++rounds) {
+      tree::mark_narrow_band<Dim>(g, phi, 1, fine, 2.0, marks);
+      const AdaptReport report = g.adapt(marks);
+      const InvariantReport r = g.check_invariants();
+      ASSERT_TRUE(r.ok()) << r.text();
+      if (report.empty()) break;
+    }
+    EXPECT_LT(rounds, 10);
+    g.for_each_cell([&](CellId c) {
+      if (crosses(g, c, phi)) {
+        EXPECT_EQ(g.level(c), fine);
+      }
+    });
+    const auto fresh = tree::narrow_band<Dim>(Box<Dim>{}, phi, 1, fine, 2.0, options);
+    if (jump == unlimited_jump) {
+      EXPECT_EQ(leaf_set(g), leaf_set(fresh));
+    } else {
+      // Balancing may keep a few extra cells that a fresh build never split.
+      EXPECT_NEAR(static_cast<double>(g.n_cells()), fresh.n_cells(), 0.05 * fresh.n_cells());
+    }
+  }
+}
+
+}  // namespace
+}  // namespace liquid
