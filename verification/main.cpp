@@ -63,7 +63,7 @@ int main(int argc, char** argv) {
 
   auto* list = app.add_subcommand("list", "list the verification cases");
 
-  std::string case_name, json_path, md_path, levels, solver;
+  std::string case_name, json_path, md_path, levels, solver, stencil;
   int max_jump = -1;
   bool full = false;
   auto* run = app.add_subcommand("run", "run one case and print its tables");
@@ -73,6 +73,7 @@ int main(int argc, char** argv) {
   run->add_option("--levels", levels, "refinement levels A:B of a convergence study");
   run->add_option("--max-jump", max_jump, "largest level jump between neighbouring cells");
   run->add_option("--solver", solver, "linear solver name");
+  run->add_option("--stencil", stencil, "RBF-FD stencil rule: nearest, face-grown or ring");
   run->add_flag("--full", full, "use the full suite's extent");
 
   std::string suite_name = "quick", out_dir = "reports/latest";
@@ -101,6 +102,7 @@ int main(int argc, char** argv) {
       if (!levels.empty()) parse_levels(levels, options);
       if (max_jump >= 0) options.max_jump = max_jump;
       if (!solver.empty()) options.solver = solver;
+      if (!stencil.empty()) options.stencil = stencil;
       options.full = full;
       fmt::print("liquid-verify run {} levels={} max-jump={} solver={} tier={}\n", case_name,
                  levels.empty() ? "default" : levels, max_jump >= 0 ? std::to_string(max_jump) : "default",

@@ -18,6 +18,7 @@ struct CaseOptions {
   std::optional<int> level_min, level_max;  ///< --levels A:B
   std::optional<int> max_jump;              ///< --max-jump K
   std::optional<std::string> solver;        ///< --solver NAME
+  std::optional<std::string> stencil;       ///< --stencil RULE (nearest, face-grown, ring)
   bool full = false;                        ///< the full suite's extent rather than the quick one
 };
 

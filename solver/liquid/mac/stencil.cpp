@@ -1,0 +1,172 @@
+#include "liquid/mac/stencil.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "liquid/core/error.hpp"
+
+namespace liquid::mac {
+
+StencilRule parse_stencil_rule(const std::string& name) {
+  if (name == "nearest") return StencilRule::nearest;
+  if (name == "face-grown") return StencilRule::face_grown;
+  if (name == "ring") return StencilRule::ring;
+  throw Error("unknown stencil rule '" + name + "'; choose nearest, face-grown or ring");
+}
+
+const char* to_string(StencilRule rule) {
+  switch (rule) {
+    case StencilRule::nearest:
+      return "nearest";
+    case StencilRule::face_grown:
+      return "face-grown";
+    case StencilRule::ring:
+      return "ring";
+  }
+  return "unknown";
+}
+
+namespace {
+
+// Candidate cells around the seeds, by rule; duplicates removed, seeds first.
+template <int Dim>
+void candidates(const CellGraph<Dim>& graph, std::span<const CellId> seeds, const Vec<Dim>& at,
+                StencilRule rule, int n_target, std::vector<CellId>& out, std::size_t& n_core) {
+  thread_local std::vector<CellId> ring;
+  out.clear();
+  n_core = 0;
+  auto add_ring = [&](int k) {
+    for (CellId s : seeds) {
+      graph.k_ring(s, k, ring);
+      out.insert(out.end(), ring.begin(), ring.end());
+    }
+    std::sort(out.begin(), out.end());
+    out.erase(std::unique(out.begin(), out.end()), out.end());
+  };
+  auto by_distance = [&](CellId a, CellId b) {
+    const double da = (graph.centre(a) - at).squaredNorm(), db = (graph.centre(b) - at).squaredNorm();
+    return da != db ? da < db : a < b;
+  };
+  const int max_k = 6;
+  switch (rule) {
+    case StencilRule::ring: {
+      for (int k = 1; k <= max_k; ++k) {
+        add_ring(k);
+        if (static_cast<int>(out.size()) >= n_target) break;
+      }
+      std::sort(out.begin(), out.end(), by_distance);
+      return;
+    }
+    case StencilRule::nearest: {
+      for (int k = 2; k <= max_k; ++k) {
+        add_ring(k);
+        if (static_cast<int>(out.size()) >= 2 * n_target) break;
+      }
+      std::sort(out.begin(), out.end(), by_distance);
+      return;
+    }
+    case StencilRule::face_grown: {
+      add_ring(1);
+      std::sort(out.begin(), out.end(), by_distance);
+      n_core = out.size();
+      if (static_cast<int>(out.size()) >= n_target) return;
+      std::vector<CellId> first(out.begin(), out.end());
+      for (int k = 2; k <= max_k; ++k) {
+        add_ring(k);
+        if (static_cast<int>(out.size()) >= n_target) break;
+      }
+      std::vector<CellId> first_by_id = first, rest;
+      std::sort(first_by_id.begin(), first_by_id.end());
+      for (CellId c : out)
+        if (!std::binary_search(first_by_id.begin(), first_by_id.end(), c)) rest.push_back(c);
+      std::sort(rest.begin(), rest.end(), by_distance);
+      out = first;
+      out.insert(out.end(), rest.begin(), rest.end());
+      return;
+    }
+  }
+}
+
+}  // namespace
+
+template <int Dim>
+void gather_stencil(const CellGraph<Dim>& graph, const DofLayout<Dim>& layout, std::span<const CellId> seeds,
+                    const Vec<Dim>& at, StencilRule rule, int n_target, std::vector<StencilNode<Dim>>& out) {
+  LIQUID_ASSERT(!seeds.empty(), "gather_stencil needs a seed cell");
+  thread_local std::vector<CellId> cells;
+  std::size_t n_core_cells = 0, n_core_nodes = 0;
+  candidates(graph, seeds, at, rule, n_target, cells, n_core_cells);
+  out.clear();
+  const Box<Dim>& domain = graph.domain();
+  const Vec<Dim> anchor = graph.centre(seeds[0]);
+  for (std::size_t i = 0; i < cells.size(); ++i) {
+    if (i == n_core_cells) n_core_nodes = out.size();
+    const CellId c = cells[i];
+    const int dof = layout.dof_of_cell[c];
+    const Vec<Dim> x = graph.centre(c);
+    if (dof < 0) {
+      // Outside the liquid: the interface point on the segment from the anchor carries the value.
+      if (!layout.levelset) continue;
+      const double phi_a = layout.levelset(anchor), phi_x = layout.levelset(x);
+      const auto cut = levelset::crossing<Dim>(layout.levelset, anchor, x, phi_a, phi_x);
+      if (!cut) continue;  // the segment leaves and re-enters: this cell is not seen from the anchor
+      out.push_back({cut->point, -1, layout.dirichlet(cut->point)});
+      continue;
+    }
+    out.push_back({x, dof, 0.0});
+    if (layout.levelset) continue;  // walls are Neumann only for the whole-domain problem
+    // Mirror images across the Neumann walls this cell touches (and the corner images).
+    const Box<Dim> b = graph.box(c);
+    std::array<int, Dim> touch{};
+    for (int k = 0; k < Dim; ++k) touch[k] = b.lo[k] <= domain.lo[k] ? -1 : (b.hi[k] >= domain.hi[k] ? 1 : 0);
+    for (int mask = 1; mask < (1 << Dim); ++mask) {
+      Vec<Dim> g = x;
+      bool ok = true;
+      for (int k = 0; k < Dim && ok; ++k) {
+        if (!(mask >> k & 1)) continue;
+        if (touch[k] == 0)
+          ok = false;
+        else
+          g[k] = 2.0 * (touch[k] < 0 ? domain.lo[k] : domain.hi[k]) - x[k];
+      }
+      if (ok) out.push_back({g, dof, 0.0});
+    }
+  }
+  // A crossing point within 1e-3 cell sizes of another node adds nothing but a near-singular
+  // system: drop it (the node beside it already sits at the interface to that accuracy).
+  if (layout.levelset) {
+    const double tol2 = std::pow(1e-3 * graph.cell_size(seeds[0]).maxCoeff(), 2);
+    std::vector<StencilNode<Dim>> kept;
+    for (std::size_t a = 0; a < out.size(); ++a) {
+      bool drop = false;
+      if (out[a].dof < 0)
+        for (std::size_t b = 0; b < out.size() && !drop; ++b)
+          drop = b != a && (out[b].dof >= 0 || b < a) && (out[a].x - out[b].x).squaredNorm() < tol2;
+      if (!drop) kept.push_back(out[a]);
+    }
+    out.swap(kept);
+  }
+  // `ring` keeps whole rings; `face_grown` keeps its candidate order (face neighbours first);
+  // `nearest` keeps the nearest nodes, with everything tied with the last kept so that symmetric
+  // layouts stay symmetric.
+  if (rule == StencilRule::ring || static_cast<int>(out.size()) <= n_target) return;
+  if (rule == StencilRule::face_grown) {
+    if (n_core_cells >= cells.size()) n_core_nodes = out.size();
+    out.resize(std::max<std::size_t>(n_target, n_core_nodes));
+    return;
+  }
+  std::stable_sort(out.begin(), out.end(), [&](const StencilNode<Dim>& a, const StencilNode<Dim>& b) {
+    return (a.x - at).squaredNorm() < (b.x - at).squaredNorm();
+  });
+  const double cut = (out[n_target - 1].x - at).squaredNorm() * (1.0 + 1e-9);
+  std::size_t keep = n_target;
+  while (keep < out.size() && (out[keep].x - at).squaredNorm() <= cut) ++keep;
+  out.resize(keep);
+}
+
+template void gather_stencil<2>(const CellGraph<2>&, const DofLayout<2>&, std::span<const CellId>,
+                                const Vec<2>&, StencilRule, int, std::vector<StencilNode<2>>&);
+template void gather_stencil<3>(const CellGraph<3>&, const DofLayout<3>&, std::span<const CellId>,
+                                const Vec<3>&, StencilRule, int, std::vector<StencilNode<3>>&);
+
+}  // namespace liquid::mac

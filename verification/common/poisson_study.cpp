@@ -1,0 +1,161 @@
+#include "poisson_study.hpp"
+
+#include <cmath>
+
+#include <fmt/format.h>
+
+#include "fit.hpp"
+#include "liquid/core/error.hpp"
+#include "liquid/core/timer.hpp"
+#include "liquid/tree/builders.hpp"
+
+namespace liquid::verification {
+
+template <int Dim>
+PoissonRun solve_poisson(const CellGraph<Dim>& graph, const PoissonStudy<Dim>& study) {
+  mac::PoissonProblem<Dim> problem;
+  problem.f = study.laplacian;
+  problem.levelset = study.levelset;
+  problem.dirichlet = study.exact;
+  problem.pin_value = study.exact;
+  const mac::PoissonSystem<Dim> system = mac::assemble_poisson<Dim>(graph, problem, study.discretisation);
+
+  PoissonRun run;
+  run.n_cells = graph.n_cells();
+  run.n_unknowns = system.n_unknowns();
+  run.assembly = system.stats;
+  run.assembly_seconds = system.stats.seconds;
+  linalg::Vector x;
+  run.solve = linalg::solve(system.A, system.b, x, study.solver);
+  run.solve_seconds = run.solve.setup_seconds + run.solve.solve_seconds;
+  if (!run.solve.converged()) return run;
+
+  // L-inf of p over the unknowns (minus the volume-weighted mean difference for zero-mean systems).
+  const auto& cells = system.layout.cell_of_dof;
+  double shift = 0.0;
+  if (system.bordered) {
+    double volume = 0.0;
+    for (std::size_t i = 0; i < cells.size(); ++i) {
+      shift += graph.volume(cells[i]) * (x[i] - study.exact(graph.centre(cells[i])));
+      volume += graph.volume(cells[i]);
+    }
+    shift /= volume;
+  }
+  for (std::size_t i = 0; i < cells.size(); ++i)
+    run.err_p = std::max(run.err_p, std::abs(x[i] - shift - study.exact(graph.centre(cells[i]))));
+
+  const std::vector<double> dpdn = mac::face_normal_derivative<Dim>(graph, system, study.discretisation, x);
+  graph.for_each_face([&](FaceId f) {
+    if (std::isnan(dpdn[f])) return;
+    const double exact = study.gradient(graph.face_centre(f))[graph.face(f).axis];
+    run.err_grad = std::max(run.err_grad, std::abs(dpdn[f] - exact));
+    const auto& g = graph.face(f);
+    if (!g.is_boundary())
+      run.max_level_jump = std::max(run.max_level_jump, std::abs(g.side_level[0] - g.side_level[1]));
+  });
+  run.h = graph.cell_size(cells.front()).maxCoeff();
+  graph.for_each_cell([&](CellId c) { run.h = std::min(run.h, graph.cell_size(c).maxCoeff()); });
+  return run;
+}
+
+namespace {
+
+Json series_entry(const std::string& group, const std::string& label, const std::vector<double>& h,
+                  const std::vector<double>& e) {
+  Json j = Json::object();
+  j.set("group", group);
+  j.set("label", label);
+  Json hs = Json::array(), es = Json::array();
+  for (std::size_t i = 0; i < h.size(); ++i) hs.push(h[i]), es.push(e[i]);
+  j.set("h", std::move(hs));
+  j.set("error", std::move(es));
+  return j;
+}
+
+}  // namespace
+
+template <int Dim>
+CaseResult run_poisson_study(PoissonStudy<Dim> study, const CaseOptions& options) {
+  if (options.level_min) study.level_min = *options.level_min;
+  if (options.level_max) study.level_max = *options.level_max;
+  if (options.max_jump) study.max_jump = *options.max_jump;
+  if (options.solver) study.solver.kind = linalg::parse_solver(*options.solver);
+  if (options.stencil) study.discretisation.rule = mac::parse_stencil_rule(*options.stencil);
+  LIQUID_VERIFY(study.level_min >= 0 && study.level_max + study.finest_offset <= morton::max_level<Dim>,
+                "--levels {}:{} out of range for {}D (finest level at most {})", study.level_min,
+                study.level_max, Dim, morton::max_level<Dim> - study.finest_offset);
+  LIQUID_VERIFY(study.max_jump >= 1, "--max-jump must be at least 1, got {}", study.max_jump);
+
+  CaseResult result;
+  CellGraphOptions<Dim> tree_options;
+  tree_options.max_jump = study.max_jump;
+  Table adaptive("adaptive tree (FD where regular, RBF-FD at T-junctions)",
+                 {"level", "h", "unknowns", "rbf rows", "jump", "err p", "order p", "err dp/dn",
+                  "order dp/dn", "assembly s", "solve s", "iterations"});
+  Table uniform("uniform grid at the same finest h",
+                {"level", "h", "unknowns", "err p", "err dp/dn", "assembly s", "solve s", "iterations"});
+  std::vector<double> hs, ep, eg, nd, uh, uep, ueg;
+  for (int level = study.level_min; level <= study.level_max; ++level) {
+    const CellGraph<Dim> graph = study.make_tree(level, tree_options);
+    const PoissonRun run = solve_poisson<Dim>(graph, study);
+    result.expect(run.solve.converged(), fmt::format("level {}: {}", level, run.solve.describe()));
+    if (!run.solve.converged()) break;
+    const std::size_t k = hs.size();
+    hs.push_back(run.h), ep.push_back(run.err_p), eg.push_back(run.err_grad), nd.push_back(run.n_unknowns);
+    const Table::Cell op = k ? Table::Cell(pair_order(hs[k - 1], ep[k - 1], hs[k], ep[k])) : Table::Cell{};
+    const Table::Cell og = k ? Table::Cell(pair_order(hs[k - 1], eg[k - 1], hs[k], eg[k])) : Table::Cell{};
+    adaptive.add_row({long(level), run.h, run.n_unknowns, run.assembly.n_rbf_rows, long(run.max_level_jump),
+                      run.err_p, op, run.err_grad, og, run.assembly_seconds, run.solve_seconds,
+                      long(run.solve.iterations)});
+    result.expect(std::isfinite(run.err_p) && std::isfinite(run.err_grad),
+                  fmt::format("level {}: NaN error", level));
+
+    const int fine = level + study.finest_offset;
+    const double limit = options.full ? 8.0 * study.uniform_limit : study.uniform_limit;
+    if (std::pow(2.0, Dim * fine) > limit) continue;
+    const CellGraph<Dim> flat = tree::uniform<Dim>(study.domain, fine, tree_options);
+    const PoissonRun u = solve_poisson<Dim>(flat, study);
+    if (!u.solve.converged()) continue;
+    uh.push_back(u.h), uep.push_back(u.err_p), ueg.push_back(u.err_grad);
+    uniform.add_row({long(fine), u.h, u.n_unknowns, u.err_p, u.err_grad, u.assembly_seconds, u.solve_seconds,
+                     long(u.solve.iterations)});
+  }
+  result.tables.push_back(std::move(adaptive));
+  result.tables.push_back(std::move(uniform));
+
+  const double order = fit_order(hs, ep), order_grad = fit_order(hs, eg);
+  // Against unknowns: err ~ N^(-q/Dim), so q = -Dim * slope of log err against log N.
+  const double order_dofs = -Dim * fit_order(nd, ep);
+  result.fields.set("order", order);
+  result.fields.set("order_grad", order_grad);
+  result.fields.set("order_dofs", order_dofs);
+  result.expect(hs.size() >= 2, "fewer than two levels: no order");
+  result.expect(order >= study.order_floor,
+                fmt::format("order of p {:.2f} below the floor {:.2f}", order, study.order_floor));
+  result.expect(
+      order_grad >= study.order_grad_floor,
+      fmt::format("order of dp/dn {:.2f} below the floor {:.2f}", order_grad, study.order_grad_floor));
+  result.notes.push_back(
+      fmt::format("observed orders (least-squares against h): p {:.2f}, dp/dn {:.2f}; against unknowns (-{} "
+                  "d log e / d log N): "
+                  "{:.2f}; solver {}, tolerance {:.0e}; stencil rule {}, PHS r^{} + degree {}",
+                  order, order_grad, Dim, order_dofs, linalg::to_string(study.solver.kind),
+                  study.solver.tolerance, mac::to_string(study.discretisation.rule),
+                  study.discretisation.rbf.exponent, study.discretisation.rbf.degree));
+  Json series = Json::array();
+  series.push(series_entry("L-inf error of p", "adaptive", hs, ep));
+  series.push(series_entry("L-inf error of dp/dn", "adaptive", hs, eg));
+  if (!uh.empty()) {
+    series.push(series_entry("L-inf error of p", "uniform", uh, uep));
+    series.push(series_entry("L-inf error of dp/dn", "uniform", uh, ueg));
+  }
+  result.fields.set("series", std::move(series));
+  return result;
+}
+
+template PoissonRun solve_poisson<2>(const CellGraph<2>&, const PoissonStudy<2>&);
+template PoissonRun solve_poisson<3>(const CellGraph<3>&, const PoissonStudy<3>&);
+template CaseResult run_poisson_study<2>(PoissonStudy<2>, const CaseOptions&);
+template CaseResult run_poisson_study<3>(PoissonStudy<3>, const CaseOptions&);
+
+}  // namespace liquid::verification

@@ -1,0 +1,55 @@
+#pragma once
+// The convergence-study driver shared by the Poisson cases: for each level of a study, build the
+// adaptive tree, assemble, solve, measure the L-inf errors of p (at unknown cells) and of the
+// normal derivative (at faces between two unknowns, against the exact one at the face centre),
+// then repeat on a uniform grid of the same finest h, so error and time sit side by side.
+
+#include <functional>
+#include <string>
+
+#include "case.hpp"
+#include "liquid/linalg/solver.hpp"
+#include "liquid/mac/poisson.hpp"
+#include "liquid/tree/cell_graph.hpp"
+
+namespace liquid::verification {
+
+template <int Dim>
+struct PoissonStudy {
+  Box<Dim> domain;
+  std::function<double(const Vec<Dim>&)> exact;       ///< p
+  std::function<Vec<Dim>(const Vec<Dim>&)> gradient;  ///< grad p
+  std::function<double(const Vec<Dim>&)> laplacian;   ///< f = Lap p
+  levelset::Function<Dim> levelset;                   ///< empty: Neumann walls
+  /// The adaptive tree of one row, by its base level.
+  std::function<CellGraph<Dim>(int level, const CellGraphOptions<Dim>& options)> make_tree;
+  int level_min = 3, level_max = 5;  ///< base levels of the rows (CaseOptions::level_* override)
+  int finest_offset = 2;             ///< finest level = base level + this
+  int max_jump = 2;
+  mac::PoissonOptions discretisation;
+  linalg::SolveOptions solver{linalg::SolverKind::bicgstab_ilut, 1e-10, 20000};
+  double order_floor = 1.9, order_grad_floor = 1.8;
+  long uniform_limit = 300000;  ///< skip the uniform comparison rows above this many cells (quick tier)
+};
+
+/// Runs the study, fills the tables, records expectations and the top-level fields
+/// ("order", "order_grad", "order_dofs", "series"). Options from the command line override the
+/// study's levels, jump limit and solver.
+template <int Dim>
+CaseResult run_poisson_study(PoissonStudy<Dim> study, const CaseOptions& options);
+
+/// One solve and its errors (also used by the unit tests and the hard cases).
+struct PoissonRun {
+  long n_cells = 0, n_unknowns = 0;
+  double h = 0.0;
+  double err_p = 0.0, err_grad = 0.0;
+  double assembly_seconds = 0.0, solve_seconds = 0.0;
+  linalg::SolveStats solve;
+  mac::AssemblyStats assembly;
+  int max_level_jump = 0;
+};
+
+template <int Dim>
+PoissonRun solve_poisson(const CellGraph<Dim>& graph, const PoissonStudy<Dim>& study);
+
+}  // namespace liquid::verification
