@@ -3,6 +3,7 @@
 //   liquid-verify list
 //   liquid-verify run CASE [--json FILE] [--md FILE] [--levels A:B] [--max-jump K] [--solver NAME] [--full]
 //   liquid-verify suite quick|full [--out DIR]
+//   liquid-verify gate [--suite quick|full] [--reference DIR] [--case NAME]... [--bless] [--perturb KIND]
 //
 // Exit codes: 0 every case met its expectations; 1 a case missed one; 2 bad input (the message
 // names it); 3 an unexpected internal error.
@@ -10,11 +11,13 @@
 #include <fmt/format.h>
 #include <CLI/CLI.hpp>
 
+#include <algorithm>
 #include <cstdio>
 #include <iostream>
 #include <regex>
 
 #include "common/case.hpp"
+#include "common/gate.hpp"
 #include "common/record.hpp"
 #include "liquid/core/error.hpp"
 #include "liquid/core/timer.hpp"
@@ -26,6 +29,7 @@ namespace {
 struct RunOutcome {
   bool passed = false;
   lv::Json json;
+  std::vector<lv::GateFigure> gate;
 };
 
 RunOutcome run_case(const lv::CaseInfo& info, const lv::CaseOptions& options, const std::string& json_path,
@@ -37,7 +41,7 @@ RunOutcome run_case(const lv::CaseInfo& info, const lv::CaseOptions& options, co
   const double seconds = watch.seconds();
   fmt::print("{}\n", lv::result_text(info.name, result, seconds));
   std::fflush(stdout);
-  RunOutcome outcome{result.passed, lv::result_json(info.name, result, seconds)};
+  RunOutcome outcome{result.passed, lv::result_json(info.name, result, seconds), result.gate};
   if (!json_path.empty()) lv::write_file(json_path, outcome.json.dump() + "\n");
   if (!md_path.empty())
     lv::write_file(md_path, lv::result_markdown(info.name, info.summary, result, seconds));
@@ -81,6 +85,17 @@ int main(int argc, char** argv) {
   suite->add_option("name", suite_name, "quick or full")->check(CLI::IsMember({"quick", "full"}));
   suite->add_option("--out", out_dir, "output folder");
 
+  std::string gate_suite = "quick", reference_dir = "reference", perturb;
+  std::vector<std::string> gate_cases;
+  bool bless = false;
+  auto* gate = app.add_subcommand("gate", "run a suite and compare its figures with the accepted ones in reference/");
+  gate->add_option("--suite", gate_suite, "quick or full")->check(CLI::IsMember({"quick", "full"}));
+  gate->add_option("--reference", reference_dir, "folder of the accepted <case>.toml files");
+  gate->add_option("--case", gate_cases, "gate only these cases (repeatable)");
+  gate->add_flag("--bless", bless, "write the current figures as the accepted ones");
+  gate->add_option("--perturb", perturb, "run a deliberately degraded scheme (first-order) to see the gate fail");
+  run->add_option("--perturb", perturb, "run a deliberately degraded scheme (first-order)");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -103,6 +118,7 @@ int main(int argc, char** argv) {
       if (max_jump >= 0) options.max_jump = max_jump;
       if (!solver.empty()) options.solver = solver;
       if (!stencil.empty()) options.stencil = stencil;
+      if (!perturb.empty()) options.perturb = perturb;
       options.full = full;
       fmt::print("liquid-verify run {} levels={} max-jump={} solver={} tier={}\n", case_name,
                  levels.empty() ? "default" : levels, max_jump >= 0 ? std::to_string(max_jump) : "default",
@@ -133,6 +149,42 @@ int main(int argc, char** argv) {
       summary.set("passed", n_failed == 0);
       lv::write_file(out_dir + "/summary.json", summary.dump() + "\n");
       fmt::print("{} passed, {} failed\n", n_run - n_failed, n_failed);
+      return n_failed == 0 ? 0 : 1;
+    }
+    if (*gate) {
+      const bool is_full = gate_suite == "full";
+      for (const auto& name : gate_cases)
+        LIQUID_VERIFY(lv::find_case(name) != nullptr, "--case: no verification case named '{}'", name);
+      fmt::print("liquid-verify gate --suite {} --reference {}{}{}\n", gate_suite, reference_dir,
+                 bless ? " --bless" : "", perturb.empty() ? "" : " --perturb " + perturb);
+      int n_failed = 0, n_run = 0;
+      for (const auto& c : lv::case_registry()) {
+        const bool chosen = gate_cases.empty() ? (is_full || c.quick)
+                                               : std::find(gate_cases.begin(), gate_cases.end(), c.name) !=
+                                                     gate_cases.end();
+        if (!chosen) continue;
+        lv::CaseOptions options;
+        options.full = is_full;
+        if (!perturb.empty()) options.perturb = perturb;
+        const auto outcome = run_case(c, options, "", "");
+        ++n_run;
+        if (bless) {
+          LIQUID_VERIFY(outcome.passed, "{} misses its own expectations; refusing to bless it", c.name);
+          lv::bless_reference(c.name, outcome.gate, reference_dir);
+          fmt::print("gate {}: blessed {} figures into {}/{}.toml\n\n", c.name, outcome.gate.size(), reference_dir,
+                     c.name);
+          continue;
+        }
+        const lv::GateOutcome g = lv::compare_with_reference(c.name, outcome.gate, reference_dir);
+        const lv::Table moved = lv::gate_table(c.name, g, false);
+        if (!moved.rows().empty()) fmt::print("{}\n", moved.to_text());
+        for (const auto& p : g.problems) fmt::print("gate {}: {}\n", c.name, p);
+        const bool ok = g.passed() && outcome.passed;
+        fmt::print("gate {}: {} ({} figures, {} moved)\n\n", c.name, ok ? "passed" : "FAILED", g.lines.size(),
+                   moved.rows().size());
+        n_failed += ok ? 0 : 1;
+      }
+      fmt::print("gate: {} passed, {} failed\n", n_run - n_failed, n_failed);
       return n_failed == 0 ? 0 : 1;
     }
   } catch (const liquid::Error& e) {

@@ -122,6 +122,8 @@ CaseResult run(const CaseOptions& options) {
       table.add_row({long{dim}, jump_name, long{row.n_leaves}, long{row.n_faces}, long{row.n_hanging},
                      long{row.n_boundary}, long{row.worst_jump}, long{row.n_steps}, row.n_split, row.n_merged,
                      row.n_failures});
+      result.gate.push_back({fmt::format("{}D jump {} invariant failures", dim, jump_name), GateFigure::Kind::count,
+                             double(row.n_failures)});
       result.expect(row.n_failures == 0, fmt::format("{}D, max jump {}: {} invariant failure(s); first {}", dim,
                                                      jump_name, row.n_failures, row.first_failure));
       result.expect(row.worst_jump <= jump,

@@ -198,6 +198,9 @@ CaseResult run(const CaseOptions&) {
                     fmt::format("{}: polynomial reproduction error {:.2e}", where, st.reproduction));
       result.expect(ok, fmt::format("{} {}: observed order {:.2f} below {} - {}", where, op.name, order,
                                     expected, order_slack));
+      const std::string key = fmt::format("{} {}", where, op.name);
+      result.gate.push_back({key + " finest error", GateFigure::Kind::error, err.back()});
+      if (checked) result.gate.push_back({key + " order", GateFigure::Kind::order, order});
       table.add_row({long(st.dim), st.label, long(st.s), long(st.m), long(st.n_nodes), st.reproduction,
                      err.front(), err.back(), order,
                      checked ? Table::Cell(long(expected)) : Table::Cell(std::string("n/a")),

@@ -19,7 +19,16 @@ struct CaseOptions {
   std::optional<int> max_jump;              ///< --max-jump K
   std::optional<std::string> solver;        ///< --solver NAME
   std::optional<std::string> stencil;       ///< --stencil RULE (nearest, face-grown, ring)
+  std::optional<std::string> perturb;       ///< --perturb first-order: a deliberately degraded scheme
   bool full = false;                        ///< the full suite's extent rather than the quick one
+};
+
+/// A figure the accuracy gate compares with its accepted value in reference/<case>.toml.
+struct GateFigure {
+  enum class Kind { error, order, iterations, count };
+  std::string name;  ///< unique within the case, e.g. "level 6 err p"
+  Kind kind;
+  double value;
 };
 
 struct CaseResult {
@@ -28,6 +37,7 @@ struct CaseResult {
   std::vector<std::string> failures;  ///< every missed expectation, one sentence each
   std::vector<std::string> notes;     ///< what a reader should know about the numbers
   Json fields = Json::object();       ///< extra top-level JSON fields ("order", "order_grad", ...)
+  std::vector<GateFigure> gate;       ///< figures the accuracy gate checks against reference/
 
   /// Records an expectation; a false one fails the case with `what`.
   void expect(bool ok, const std::string& what) {

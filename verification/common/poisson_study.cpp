@@ -81,6 +81,13 @@ CaseResult run_poisson_study(PoissonStudy<Dim> study, const CaseOptions& options
   if (options.max_jump) study.max_jump = *options.max_jump;
   if (options.solver) study.solver.kind = linalg::parse_solver(*options.solver);
   if (options.stencil) study.discretisation.rule = mac::parse_stencil_rule(*options.stencil);
+  if (options.perturb) {
+    // A deliberately inconsistent scheme for showing that the gate catches regressions: degree-1
+    // polynomials cannot reproduce the Laplacian of quadratics at T-junctions.
+    LIQUID_VERIFY(*options.perturb == "first-order", "--perturb: only 'first-order' is known, got '{}'",
+                  *options.perturb);
+    study.discretisation.rbf.degree = 1;
+  }
   LIQUID_VERIFY(study.level_min >= 0 && study.level_max + study.finest_offset <= morton::max_level<Dim>,
                 "--levels {}:{} out of range for {}D (finest level at most {})", study.level_min,
                 study.level_max, Dim, morton::max_level<Dim> - study.finest_offset);
@@ -104,6 +111,10 @@ CaseResult run_poisson_study(PoissonStudy<Dim> study, const CaseOptions& options
     hs.push_back(run.h), ep.push_back(run.err_p), eg.push_back(run.err_grad), nd.push_back(run.n_unknowns);
     const Table::Cell op = k ? Table::Cell(pair_order(hs[k - 1], ep[k - 1], hs[k], ep[k])) : Table::Cell{};
     const Table::Cell og = k ? Table::Cell(pair_order(hs[k - 1], eg[k - 1], hs[k], eg[k])) : Table::Cell{};
+    result.gate.push_back({fmt::format("level {} err p", level), GateFigure::Kind::error, run.err_p});
+    result.gate.push_back({fmt::format("level {} err dp/dn", level), GateFigure::Kind::error, run.err_grad});
+    result.gate.push_back(
+        {fmt::format("level {} iterations", level), GateFigure::Kind::iterations, double(run.solve.iterations)});
     adaptive.add_row({long(level), run.h, run.n_unknowns, run.assembly.n_rbf_rows, long(run.max_level_jump),
                       run.err_p, op, run.err_grad, og, run.assembly_seconds, run.solve_seconds,
                       long(run.solve.iterations)});
@@ -126,6 +137,8 @@ CaseResult run_poisson_study(PoissonStudy<Dim> study, const CaseOptions& options
   const double order = fit_order(hs, ep), order_grad = fit_order(hs, eg);
   // Against unknowns: err ~ N^(-q/Dim), so q = -Dim * slope of log err against log N.
   const double order_dofs = -Dim * fit_order(nd, ep);
+  result.gate.push_back({"order p", GateFigure::Kind::order, order});
+  result.gate.push_back({"order dp/dn", GateFigure::Kind::order, order_grad});
   result.fields.set("order", order);
   result.fields.set("order_grad", order_grad);
   result.fields.set("order_dofs", order_dofs);
