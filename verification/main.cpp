@@ -3,6 +3,9 @@
 //   liquid-verify list
 //   liquid-verify run CASE [--json FILE] [--md FILE] [--levels A:B] [--max-jump K] [--solver NAME] [--full]
 //   liquid-verify suite quick|full [--out DIR]
+//   liquid-verify poisson --dim 2|3 --exact EXPR [--levelset EXPR] --domain x0,x1,y0,y1[,z0,z1]
+//                         --bc neumann|dirichlet --tree uniform|band|random:SEED --max-jump K --levels A:B
+//                         [--solver NAME] [--json FILE] [--md FILE]
 //   liquid-verify gate [--suite quick|full] [--reference DIR] [--case NAME]... [--bless] [--perturb KIND]
 //
 // Exit codes: 0 every case met its expectations; 1 a case missed one; 2 bad input (the message
@@ -21,6 +24,7 @@
 #include "common/record.hpp"
 #include "liquid/core/error.hpp"
 #include "liquid/core/timer.hpp"
+#include "user_poisson.hpp"
 
 namespace lv = liquid::verification;
 
@@ -88,13 +92,32 @@ int main(int argc, char** argv) {
   std::string gate_suite = "quick", reference_dir = "reference", perturb;
   std::vector<std::string> gate_cases;
   bool bless = false;
-  auto* gate = app.add_subcommand("gate", "run a suite and compare its figures with the accepted ones in reference/");
+  auto* gate =
+      app.add_subcommand("gate", "run a suite and compare its figures with the accepted ones in reference/");
   gate->add_option("--suite", gate_suite, "quick or full")->check(CLI::IsMember({"quick", "full"}));
   gate->add_option("--reference", reference_dir, "folder of the accepted <case>.toml files");
   gate->add_option("--case", gate_cases, "gate only these cases (repeatable)");
   gate->add_flag("--bless", bless, "write the current figures as the accepted ones");
-  gate->add_option("--perturb", perturb, "run a deliberately degraded scheme (first-order) to see the gate fail");
+  gate->add_option("--perturb", perturb,
+                   "run a deliberately degraded scheme (first-order) to see the gate fail");
   run->add_option("--perturb", perturb, "run a deliberately degraded scheme (first-order)");
+
+  lv::UserPoissonArgs user;
+  std::string user_json, user_md;
+  auto* poisson = app.add_subcommand("poisson", "your own manufactured-solution convergence study");
+  poisson->add_option("--dim", user.dim, "2 or 3")->required();
+  poisson->add_option("--exact", user.exact, "exact p as an expression in x, y (, z), e.g. 'sin(x)*cos(2*y)'")
+      ->required();
+  poisson->add_option("--levelset", user.levelset,
+                      "unknowns where this expression is negative; p = exact on its zero set");
+  poisson->add_option("--domain", user.domain, "x0,x1,y0,y1[,z0,z1]")->required();
+  poisson->add_option("--bc", user.bc, "walls: neumann or dirichlet (the exact p)");
+  poisson->add_option("--tree", user.tree, "uniform, band, or random:SEED");
+  poisson->add_option("--max-jump", user.max_jump, "largest level jump between neighbouring cells");
+  poisson->add_option("--levels", user.levels, "base levels A:B of the rows");
+  poisson->add_option("--solver", user.solver, "linear solver name");
+  poisson->add_option("--json", user_json, "write the result as JSON to FILE");
+  poisson->add_option("--md", user_md, "write the result as Markdown to FILE");
 
   try {
     app.parse(argc, argv);
@@ -151,6 +174,13 @@ int main(int argc, char** argv) {
       fmt::print("{} passed, {} failed\n", n_run - n_failed, n_failed);
       return n_failed == 0 ? 0 : 1;
     }
+    if (*poisson) {
+      const std::string command = lv::describe(user);
+      fmt::print("{}\n", command);
+      const lv::CaseInfo info{"poisson-user", command, false,
+                              [&](const lv::CaseOptions&) { return lv::run_user_poisson(user); }};
+      return run_case(info, lv::CaseOptions{}, user_json, user_md).passed ? 0 : 1;
+    }
     if (*gate) {
       const bool is_full = gate_suite == "full";
       for (const auto& name : gate_cases)
@@ -159,9 +189,9 @@ int main(int argc, char** argv) {
                  bless ? " --bless" : "", perturb.empty() ? "" : " --perturb " + perturb);
       int n_failed = 0, n_run = 0;
       for (const auto& c : lv::case_registry()) {
-        const bool chosen = gate_cases.empty() ? (is_full || c.quick)
-                                               : std::find(gate_cases.begin(), gate_cases.end(), c.name) !=
-                                                     gate_cases.end();
+        const bool chosen = gate_cases.empty()
+                                ? (is_full || c.quick)
+                                : std::find(gate_cases.begin(), gate_cases.end(), c.name) != gate_cases.end();
         if (!chosen) continue;
         lv::CaseOptions options;
         options.full = is_full;
@@ -171,8 +201,8 @@ int main(int argc, char** argv) {
         if (bless) {
           LIQUID_VERIFY(outcome.passed, "{} misses its own expectations; refusing to bless it", c.name);
           lv::bless_reference(c.name, outcome.gate, reference_dir);
-          fmt::print("gate {}: blessed {} figures into {}/{}.toml\n\n", c.name, outcome.gate.size(), reference_dir,
-                     c.name);
+          fmt::print("gate {}: blessed {} figures into {}/{}.toml\n\n", c.name, outcome.gate.size(),
+                     reference_dir, c.name);
           continue;
         }
         const lv::GateOutcome g = lv::compare_with_reference(c.name, outcome.gate, reference_dir);

@@ -111,21 +111,22 @@ CaseResult run(const CaseOptions& options) {
   const int n_steps = options.full ? 100 : 25;
 
   Table table("Random trees after build and adapt steps: sizes of the built tree, worst jump over the run",
-              {"dim", "max jump", "leaves", "faces", "hanging faces", "boundary faces", "worst jump", "adapt steps",
-               "splits", "merges", "invariant failures"});
+              {"dim", "max jump", "leaves", "faces", "hanging faces", "boundary faces", "worst jump",
+               "adapt steps", "splits", "merges", "invariant failures"});
   for (int dim : {2, 3}) {
     for (int jump : jumps) {
       const std::uint64_t seed = 1000 * dim + static_cast<std::uint64_t>(std::min(jump, 99));
-      const Row row = dim == 2 ? run_one<2>(jump, first, last, n_steps, seed)
-                               : run_one<3>(jump, std::max(0, first), std::max(first + 1, last - 2), n_steps, seed);
+      const Row row =
+          dim == 2 ? run_one<2>(jump, first, last, n_steps, seed)
+                   : run_one<3>(jump, std::max(0, first), std::max(first + 1, last - 2), n_steps, seed);
       const std::string jump_name = jump == unlimited_jump ? "unlimited" : std::to_string(jump);
       table.add_row({long{dim}, jump_name, long{row.n_leaves}, long{row.n_faces}, long{row.n_hanging},
                      long{row.n_boundary}, long{row.worst_jump}, long{row.n_steps}, row.n_split, row.n_merged,
                      row.n_failures});
-      result.gate.push_back({fmt::format("{}D jump {} invariant failures", dim, jump_name), GateFigure::Kind::count,
-                             double(row.n_failures)});
-      result.expect(row.n_failures == 0, fmt::format("{}D, max jump {}: {} invariant failure(s); first {}", dim,
-                                                     jump_name, row.n_failures, row.first_failure));
+      result.gate.push_back({fmt::format("{}D jump {} invariant failures", dim, jump_name),
+                             GateFigure::Kind::count, double(row.n_failures)});
+      result.expect(row.n_failures == 0, fmt::format("{}D, max jump {}: {} invariant failure(s); first {}",
+                                                     dim, jump_name, row.n_failures, row.first_failure));
       result.expect(row.worst_jump <= jump,
                     fmt::format("{}D, max jump {}: a jump of {} was seen", dim, jump_name, row.worst_jump));
       if (jump >= 2)
@@ -134,13 +135,14 @@ CaseResult run(const CaseOptions& options) {
     }
   }
   result.tables.push_back(std::move(table));
-  result.notes.push_back("hanging faces: faces smaller than the cell side on one of their sides (T-junctions)");
+  result.notes.push_back(
+      "hanging faces: faces smaller than the cell side on one of their sides (T-junctions)");
   return result;
 }
 
-LIQUID_VERIFICATION_CASE({"cellgraph-invariants",
-                          "Cellgraph invariants on random non-graded trees, 2D and 3D, every level-jump limit", true,
-                          run});
+LIQUID_VERIFICATION_CASE(
+    {"cellgraph-invariants",
+     "Cellgraph invariants on random non-graded trees, 2D and 3D, every level-jump limit", true, run});
 
 }  // namespace
 }  // namespace liquid::verification

@@ -14,10 +14,14 @@ namespace liquid::verification {
 
 const char* to_string(GateFigure::Kind kind) {
   switch (kind) {
-    case GateFigure::Kind::error: return "error";
-    case GateFigure::Kind::order: return "order";
-    case GateFigure::Kind::iterations: return "iterations";
-    case GateFigure::Kind::count: return "count";
+    case GateFigure::Kind::error:
+      return "error";
+    case GateFigure::Kind::order:
+      return "order";
+    case GateFigure::Kind::iterations:
+      return "iterations";
+    case GateFigure::Kind::count:
+      return "count";
   }
   return "unknown";
 }
@@ -45,8 +49,8 @@ GateTolerance read_tolerance(const toml::table& doc, const std::string& path) {
     auto get = [&](const char* key, double& out) {
       if (const auto* node = tol->get(key)) {
         const auto v = node->value<double>();
-        LIQUID_VERIFY(v && *v >= 0.0, "{}: tolerance.{} must be a non-negative number", where(path, node->source()),
-                      key);
+        LIQUID_VERIFY(v && *v >= 0.0, "{}: tolerance.{} must be a non-negative number",
+                      where(path, node->source()), key);
         out = *v;
       }
     };
@@ -62,7 +66,8 @@ toml::table parse_file(const std::string& path) {
   try {
     return toml::parse_file(path);
   } catch (const toml::parse_error& e) {
-    throw Error(fmt::format("{}:{}:{}: {}", path, e.source().begin.line, e.source().begin.column, e.description()));
+    throw Error(
+        fmt::format("{}:{}:{}: {}", path, e.source().begin.line, e.source().begin.column, e.description()));
   }
 }
 
@@ -80,7 +85,8 @@ GateOutcome compare_with_reference(const std::string& case_name, const std::vect
   GateOutcome out;
   const std::string path = reference_path(reference_dir, case_name);
   if (!std::filesystem::exists(path)) {
-    out.problems.push_back(fmt::format("no accepted figures: {} is missing (run the gate with --bless)", path));
+    out.problems.push_back(
+        fmt::format("no accepted figures: {} is missing (run the gate with --bless)", path));
     return out;
   }
   const toml::table doc = parse_file(path);
@@ -135,8 +141,8 @@ GateOutcome compare_with_reference(const std::string& case_name, const std::vect
     for (const auto& p : out.problems) known = known || p.find("'" + f.name + "'") != std::string::npos;
     if (!known)
       out.problems.push_back(
-          fmt::format("{}: new figure '{}' = {:.6g} has no accepted value (bless to accept it)", case_name, f.name,
-                      f.value));
+          fmt::format("{}: new figure '{}' = {:.6g} has no accepted value (bless to accept it)", case_name,
+                      f.name, f.value));
   }
   return out;
 }
@@ -149,19 +155,22 @@ void bless_reference(const std::string& case_name, const std::vector<GateFigure>
   std::string text = fmt::format(
       "# Accepted figures of the verification case {}, checked by `liquid-verify gate`.\n"
       "# Written by `liquid-verify gate --bless`; a commit that moves them says why.\n"
-      "case = \"{}\"\n\n[tolerance]\nerror_rel = {}\nerror_floor = {}\norder_drop = {}\niterations_rel = {}\n",
+      "case = \"{}\"\n\n[tolerance]\nerror_rel = {}\nerror_floor = {}\norder_drop = {}\niterations_rel = "
+      "{}\n",
       case_name, case_name, tol.error_rel, tol.error_floor, tol.order_drop, tol.iterations_rel);
   for (const auto& f : figures)
-    text += fmt::format("\n[[figure]]\nname = \"{}\"\nkind = \"{}\"\nvalue = {:.10g}\n", f.name, to_string(f.kind),
-                        f.value);
+    text += fmt::format("\n[[figure]]\nname = \"{}\"\nkind = \"{}\"\nvalue = {:.10g}\n", f.name,
+                        to_string(f.kind), f.value);
   write_file(path, text);
 }
 
 Table gate_table(const std::string& case_name, const GateOutcome& outcome, bool all) {
-  Table t(fmt::format("gate {}: figures that moved", case_name), {"figure", "kind", "accepted", "now", "allowed", "status"});
+  Table t(fmt::format("gate {}: figures that moved", case_name),
+          {"figure", "kind", "accepted", "now", "allowed", "status"});
   for (const auto& l : outcome.lines) {
     if (!all && !l.moved && !l.regression) continue;
-    t.add_row({l.figure, l.kind, l.accepted, l.now, l.allowed, std::string(l.regression ? "REGRESSION" : "ok")});
+    t.add_row(
+        {l.figure, l.kind, l.accepted, l.now, l.allowed, std::string(l.regression ? "REGRESSION" : "ok")});
   }
   return t;
 }

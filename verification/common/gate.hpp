@@ -27,7 +27,7 @@ struct GateLine {
 };
 
 struct GateOutcome {
-  std::vector<GateLine> lines;  ///< every accepted figure, in file order
+  std::vector<GateLine> lines;        ///< every accepted figure, in file order
   std::vector<std::string> problems;  ///< missing figures, a missing reference file
   bool passed() const;
 };

@@ -17,6 +17,7 @@ PoissonRun solve_poisson(const CellGraph<Dim>& graph, const PoissonStudy<Dim>& s
   problem.f = study.laplacian;
   problem.levelset = study.levelset;
   problem.dirichlet = study.exact;
+  problem.dirichlet_walls = study.dirichlet_walls;
   problem.pin_value = study.exact;
   const mac::PoissonSystem<Dim> system = mac::assemble_poisson<Dim>(graph, problem, study.discretisation);
 
@@ -113,8 +114,8 @@ CaseResult run_poisson_study(PoissonStudy<Dim> study, const CaseOptions& options
     const Table::Cell og = k ? Table::Cell(pair_order(hs[k - 1], eg[k - 1], hs[k], eg[k])) : Table::Cell{};
     result.gate.push_back({fmt::format("level {} err p", level), GateFigure::Kind::error, run.err_p});
     result.gate.push_back({fmt::format("level {} err dp/dn", level), GateFigure::Kind::error, run.err_grad});
-    result.gate.push_back(
-        {fmt::format("level {} iterations", level), GateFigure::Kind::iterations, double(run.solve.iterations)});
+    result.gate.push_back({fmt::format("level {} iterations", level), GateFigure::Kind::iterations,
+                           double(run.solve.iterations)});
     adaptive.add_row({long(level), run.h, run.n_unknowns, run.assembly.n_rbf_rows, long(run.max_level_jump),
                       run.err_p, op, run.err_grad, og, run.assembly_seconds, run.solve_seconds,
                       long(run.solve.iterations)});

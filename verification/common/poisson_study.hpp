@@ -21,6 +21,7 @@ struct PoissonStudy {
   std::function<Vec<Dim>(const Vec<Dim>&)> gradient;  ///< grad p
   std::function<double(const Vec<Dim>&)> laplacian;   ///< f = Lap p
   levelset::Function<Dim> levelset;                   ///< empty: Neumann walls
+  bool dirichlet_walls = false;                       ///< walls carry p (else Neumann)
   /// The adaptive tree of one row, by its base level.
   std::function<CellGraph<Dim>(int level, const CellGraphOptions<Dim>& options)> make_tree;
   int level_min = 3, level_max = 5;  ///< base levels of the rows (CaseOptions::level_* override)

@@ -18,6 +18,7 @@ DofLayout<Dim> make_layout(const CellGraph<Dim>& graph, const PoissonProblem<Dim
   DofLayout<Dim> layout;
   layout.levelset = problem.levelset;
   layout.dirichlet = problem.dirichlet;
+  layout.dirichlet_walls = problem.dirichlet_walls;
   layout.dof_of_cell.assign(graph.cell_capacity(), -1);
   graph.for_each_cell([&](CellId c) {
     if (problem.levelset) {
@@ -76,7 +77,15 @@ void fd_row(const CellGraph<Dim>& graph, const DofLayout<Dim>& layout, CellId c,
       dof[s] = i;  // a wall's ghost mirrors the centre
       val[s] = 0.0;
       graph.for_each_side_face(c, k, dir, [&](const SideFace& sf) {
-        if (sf.adjacency == Adjacency::boundary) return;
+        if (sf.adjacency == Adjacency::boundary) {
+          if (!layout.dirichlet_walls) return;  // Neumann: the ghost mirrors the centre
+          Vec<Dim> w = x;
+          w[k] = dir < 0 ? graph.domain().lo[k] : graph.domain().hi[k];
+          d[s] = 0.5 * h[k];
+          dof[s] = -1;
+          val[s] = layout.dirichlet(w);
+          return;
+        }
         const int j = layout.dof_of_cell[sf.neighbour];
         if (j >= 0) {
           dof[s] = j;
@@ -153,7 +162,7 @@ PoissonSystem<Dim> assemble_poisson(const CellGraph<Dim>& graph, const PoissonPr
   PoissonSystem<Dim> sys;
   sys.layout = make_layout(graph, problem);
   const long n = sys.n_unknowns();
-  const bool neumann = !problem.levelset;
+  const bool neumann = !problem.levelset && !problem.dirichlet_walls;
   sys.bordered = neumann && options.nullspace == Nullspace::zero_mean;
   if (neumann && options.nullspace == Nullspace::pin) {
     LIQUID_VERIFY(problem.pin_value, "pinning a Neumann problem needs the value at the pinned cell");

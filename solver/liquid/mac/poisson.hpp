@@ -41,7 +41,8 @@ template <int Dim>
 struct PoissonProblem {
   std::function<double(const Vec<Dim>&)> f;          ///< right-hand side of Lap p = f
   levelset::Function<Dim> levelset;                  ///< empty: whole domain with Neumann walls
-  std::function<double(const Vec<Dim>&)> dirichlet;  ///< p on the interface (level-set problems)
+  std::function<double(const Vec<Dim>&)> dirichlet;  ///< p on the interface (level-set problems) and walls
+  bool dirichlet_walls = false;                      ///< walls carry `dirichlet` values (else Neumann)
   std::function<double(const Vec<Dim>&)> pin_value;  ///< p at the pinned centre (Nullspace::pin)
 };
 

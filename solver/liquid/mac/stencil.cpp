@@ -114,8 +114,8 @@ void gather_stencil(const CellGraph<Dim>& graph, const DofLayout<Dim>& layout, s
       continue;
     }
     out.push_back({x, dof, 0.0});
-    if (layout.levelset) continue;  // walls are Neumann only for the whole-domain problem
-    // Mirror images across the Neumann walls this cell touches (and the corner images).
+    // Mirror images across the Neumann walls this cell touches (and the corner images), or with
+    // Dirichlet walls the projections onto them, carrying the wall value.
     const Box<Dim> b = graph.box(c);
     std::array<int, Dim> touch{};
     for (int k = 0; k < Dim; ++k) touch[k] = b.lo[k] <= domain.lo[k] ? -1 : (b.hi[k] >= domain.hi[k] ? 1 : 0);
@@ -126,10 +126,16 @@ void gather_stencil(const CellGraph<Dim>& graph, const DofLayout<Dim>& layout, s
         if (!(mask >> k & 1)) continue;
         if (touch[k] == 0)
           ok = false;
+        else if (layout.dirichlet_walls)
+          g[k] = touch[k] < 0 ? domain.lo[k] : domain.hi[k];
         else
           g[k] = 2.0 * (touch[k] < 0 ? domain.lo[k] : domain.hi[k]) - x[k];
       }
-      if (ok) out.push_back({g, dof, 0.0});
+      if (!ok) continue;
+      if (layout.dirichlet_walls)
+        out.push_back({g, -1, layout.dirichlet(g)});
+      else
+        out.push_back({g, dof, 0.0});
     }
   }
   // A crossing point within 1e-3 cell sizes of another node adds nothing but a near-singular

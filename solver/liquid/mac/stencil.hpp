@@ -38,13 +38,15 @@ struct DofLayout {
   std::vector<int> dof_of_cell;  ///< per cell id: unknown index or -1
   std::vector<CellId> cell_of_dof;
   levelset::Function<Dim> levelset;                  ///< empty: every cell is an unknown, walls are Neumann
-  std::function<double(const Vec<Dim>&)> dirichlet;  ///< value on the interface {levelset = 0}
+  std::function<double(const Vec<Dim>&)> dirichlet;  ///< value on the interface {levelset = 0} and walls
+  bool dirichlet_walls = false;  ///< domain walls carry `dirichlet` values instead of being Neumann
 };
 
 /// Gathers the nodes of an operator evaluated at `at`, seeded by `seeds` (the cell(s) the operator
 /// belongs to; seeds[0] is the anchor from which interface crossings are searched). Cells outside
 /// the level set become their crossing point on the segment anchor -> cell, with the Dirichlet
-/// value. Nodes of cells that touch a Neumann wall are mirrored across it (same unknown). Keeps at
+/// value. Nodes of cells that touch a Neumann wall are mirrored across it (same unknown); with
+/// Dirichlet walls the projections of those nodes onto the wall carry the wall value. Keeps at
 /// least `n_target` nodes when the graph has them, the nodes ordered by distance from `at`.
 template <int Dim>
 void gather_stencil(const CellGraph<Dim>& graph, const DofLayout<Dim>& layout, std::span<const CellId> seeds,

@@ -164,3 +164,33 @@ TEST(Poisson, BadInputIsNamed) {
 
 }  // namespace
 }  // namespace liquid::mac
+
+namespace liquid::mac {
+namespace {
+
+template <int Dim>
+void dirichlet_walls_quadratic_is_exact() {
+  const CellGraph<Dim> graph = non_graded<Dim>(Dim == 2 ? 3 : 2);
+  PoissonProblem<Dim> problem;
+  problem.f = quad_laplacian<Dim>;
+  problem.dirichlet = quad<Dim>;
+  problem.dirichlet_walls = true;
+  const PoissonSystem<Dim> sys = assemble_poisson<Dim>(graph, problem, PoissonOptions{});
+  EXPECT_EQ(sys.pinned, no_cell);
+  linalg::Vector p;
+  ASSERT_TRUE(linalg::solve(sys.A, sys.b, p, {linalg::SolverKind::direct}).converged());
+  double err = 0.0;
+  for (long i = 0; i < sys.n_unknowns(); ++i)
+    err = std::max(err, std::abs(p[i] - quad<Dim>(graph.centre(sys.layout.cell_of_dof[i]))));
+  EXPECT_LT(err, 1e-9);
+}
+
+TEST(Poisson, DirichletWallsQuadraticIsExact2D) {
+  dirichlet_walls_quadratic_is_exact<2>();
+}
+TEST(Poisson, DirichletWallsQuadraticIsExact3D) {
+  dirichlet_walls_quadratic_is_exact<3>();
+}
+
+}  // namespace
+}  // namespace liquid::mac

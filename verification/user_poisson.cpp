@@ -1,0 +1,144 @@
+#include "user_poisson.hpp"
+
+#include <regex>
+#include <sstream>
+
+#include <fmt/format.h>
+
+#include "common/expression.hpp"
+#include "common/poisson_study.hpp"
+#include "liquid/core/error.hpp"
+#include "liquid/levelset/levelset.hpp"
+#include "liquid/tree/builders.hpp"
+
+namespace liquid::verification {
+
+namespace {
+
+std::vector<double> parse_numbers(const std::string& text, const std::string& what) {
+  std::vector<double> out;
+  std::stringstream ss(text);
+  std::string item;
+  while (std::getline(ss, item, ',')) {
+    std::size_t used = 0;
+    double v = 0.0;
+    try {
+      v = std::stod(item, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    LIQUID_VERIFY(used > 0 && item.find_first_not_of(" \t", used) == std::string::npos,
+                  "{}: '{}' is not a number (in '{}')", what, item, text);
+    out.push_back(v);
+  }
+  return out;
+}
+
+template <int Dim>
+CaseResult run(const UserPoissonArgs& args) {
+  const auto box = parse_numbers(args.domain, "--domain");
+  LIQUID_VERIFY(static_cast<int>(box.size()) == 2 * Dim,
+                "--domain: {}D needs {} numbers x0,x1,y0,y1{}, got {}", Dim, 2 * Dim,
+                Dim == 3 ? ",z0,z1" : "", box.size());
+  Box<Dim> domain;
+  for (int k = 0; k < Dim; ++k) {
+    domain.lo[k] = box[2 * k];
+    domain.hi[k] = box[2 * k + 1];
+    LIQUID_VERIFY(std::isfinite(box[2 * k]) && std::isfinite(box[2 * k + 1]) && box[2 * k] < box[2 * k + 1],
+                  "--domain: axis {} is empty or inverted ({} .. {})", k, box[2 * k], box[2 * k + 1]);
+  }
+  LIQUID_VERIFY(args.bc == "neumann" || args.bc == "dirichlet", "--bc must be neumann or dirichlet, got '{}'",
+                args.bc);
+  LIQUID_VERIFY(args.max_jump >= 1, "--max-jump must be at least 1, got {}", args.max_jump);
+
+  auto exact = std::make_shared<Expression<Dim>>(args.exact, "--exact");
+  std::shared_ptr<Expression<Dim>> phi;
+  if (!args.levelset.empty()) phi = std::make_shared<Expression<Dim>>(args.levelset, "--levelset");
+
+  PoissonStudy<Dim> s;
+  s.domain = domain;
+  s.exact = [exact](const Vec<Dim>& x) { return (*exact)(x); };
+  s.gradient = [exact](const Vec<Dim>& x) {
+    Vec<Dim> g;
+    for (int k = 0; k < Dim; ++k) g[k] = exact->derivative(x, k);
+    return g;
+  };
+  s.laplacian = [exact](const Vec<Dim>& x) { return exact->laplacian(x); };
+  if (phi) s.levelset = [phi](const Vec<Dim>& x) { return (*phi)(x); };
+  s.dirichlet_walls = args.bc == "dirichlet";
+  s.max_jump = args.max_jump;
+  s.solver.kind = linalg::parse_solver(args.solver);
+  s.order_floor = s.order_grad_floor = -std::numeric_limits<double>::infinity();  // a study, not a test
+
+  std::smatch m;
+  static const std::regex levels(R"(^\s*(\d+)\s*:\s*(\d+)\s*$)");
+  LIQUID_VERIFY(std::regex_match(args.levels, m, levels), "--levels expects A:B, got '{}'", args.levels);
+  s.level_min = std::stoi(m[1]);
+  s.level_max = std::stoi(m[2]);
+  LIQUID_VERIFY(s.level_min <= s.level_max, "--levels {}: the first level exceeds the last", args.levels);
+
+  // The refined region: the level set when given, else a circle/sphere at the centre.
+  levelset::Function<Dim> band_phi = s.levelset;
+  if (!band_phi) band_phi = levelset::sphere<Dim>(domain.centre(), 0.25 * domain.size().minCoeff());
+  static const std::regex random(R"(^random:(\d+)$)");
+  if (args.tree == "uniform") {
+    s.finest_offset = 0;
+    s.make_tree = [domain](int level, const CellGraphOptions<Dim>& o) {
+      return tree::uniform<Dim>(domain, level, o);
+    };
+  } else if (args.tree == "band") {
+    s.make_tree = [domain, band_phi](int level, const CellGraphOptions<Dim>& o) {
+      return tree::banded<Dim>(domain, band_phi, level, 3.0, o);
+    };
+  } else if (std::regex_match(args.tree, m, random)) {
+    const std::uint64_t seed = std::stoull(m[1]);
+    s.make_tree = [domain, seed](int level, const CellGraphOptions<Dim>& o) {
+      return tree::random<Dim>(domain, seed, level, level + 2, 0.3, o);
+    };
+  } else {
+    throw Error(fmt::format("--tree must be uniform, band or random:SEED, got '{}'", args.tree));
+  }
+  LIQUID_VERIFY(s.level_max + s.finest_offset <= morton::max_level<Dim>,
+                "--levels {}: the finest level {} exceeds {} in {}D", args.levels,
+                s.level_max + s.finest_offset, morton::max_level<Dim>, Dim);
+
+  // How far below the measured errors is the numerical f? GSL's estimate at sample points.
+  double f_err = 0.0;
+  for (int i = 0; i < 64; ++i) {
+    Vec<Dim> x;
+    for (int k = 0; k < Dim; ++k)
+      x[k] = domain.lo[k] + domain.size()[k] * ((i * (k + 3) * 37 % 64) + 0.5) / 64;
+    double e = 0.0;
+    exact->laplacian(x, &e);
+    f_err = std::max(f_err, e);
+  }
+
+  CaseOptions options;
+  CaseResult result = run_poisson_study<Dim>(s, options);
+  result.notes.push_back(
+      fmt::format("grad p from GSL central differences and f = Lap p from Richardson-extrapolated second "
+                  "differences of '{}'; largest estimated error of f at 64 sample points: "
+                  "{:.1e} (an error in f of e moves p by about e times the domain size squared)",
+                  args.exact, f_err));
+  result.fields.set("f_error_estimate", f_err);
+  result.fields.set("command", describe(args));
+  return result;
+}
+
+}  // namespace
+
+std::string describe(const UserPoissonArgs& a) {
+  return fmt::format(
+      "liquid-verify poisson --dim {} --exact '{}'{} --domain {} --bc {} --tree {} --max-jump {} "
+      "--levels {} --solver {}",
+      a.dim, a.exact, a.levelset.empty() ? "" : " --levelset '" + a.levelset + "'", a.domain, a.bc, a.tree,
+      a.max_jump, a.levels, a.solver);
+}
+
+CaseResult run_user_poisson(const UserPoissonArgs& args) {
+  LIQUID_VERIFY(args.dim == 2 || args.dim == 3, "--dim must be 2 or 3, got {}", args.dim);
+  LIQUID_VERIFY(!args.exact.empty(), "--exact is required");
+  return args.dim == 2 ? run<2>(args) : run<3>(args);
+}
+
+}  // namespace liquid::verification

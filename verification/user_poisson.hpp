@@ -1,0 +1,29 @@
+#pragma once
+// `liquid-verify poisson`: a user's own manufactured-solution convergence study.
+
+#include <string>
+
+#include "common/case.hpp"
+
+namespace liquid::verification {
+
+struct UserPoissonArgs {
+  int dim = 2;
+  std::string exact;     ///< p(x, y[, z])
+  std::string levelset;  ///< optional: unknowns where it is negative, p = exact on its zero set
+  std::string domain;    ///< "x0,x1,y0,y1[,z0,z1]"
+  std::string bc = "neumann";
+  std::string tree = "band";  ///< uniform | band | random:SEED
+  int max_jump = 2;
+  std::string levels = "4:6";
+  std::string solver = "bicgstab-ilut";
+};
+
+/// Runs the study (tables printed by the caller). Throws liquid::Error naming the argument on bad
+/// input.
+CaseResult run_user_poisson(const UserPoissonArgs& args);
+
+/// The command line echoed back (for the record and the report).
+std::string describe(const UserPoissonArgs& args);
+
+}  // namespace liquid::verification
