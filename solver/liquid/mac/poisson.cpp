@@ -178,8 +178,8 @@ PoissonSystem<Dim> assemble_poisson(const CellGraph<Dim>& graph, const PoissonPr
   const int n_target = target_nodes<Dim>(options);
   AssemblyStats stats;
   std::string failure;
-  long n_fd = 0, n_rbf = 0, n_reduced = 0, n_retried = 0;
-#pragma omp parallel reduction(+ : n_fd, n_rbf, n_reduced, n_retried)
+  long n_fd = 0, n_rbf = 0, n_reduced = 0, n_retried = 0, n_on_interface = 0;
+#pragma omp parallel reduction(+ : n_fd, n_rbf, n_reduced, n_retried, n_on_interface)
   {
     std::vector<StencilNode<Dim>> nodes;
     std::vector<double> w;
@@ -215,7 +215,10 @@ PoissonSystem<Dim> assemble_poisson(const CellGraph<Dim>& graph, const PoissonPr
             on_interface = true;
             break;
           }
-        if (on_interface) continue;
+        if (on_interface) {
+          ++n_on_interface;
+          continue;
+        }
         const rbf::Status st =
             stencil_weights<Dim>(nodes, x, rbf::Operator<Dim>::lap(), options.rbf, w, n_retried);
         LIQUID_VERIFY(st.usable(), "cell {} at ({:.6g}): RBF-FD Laplacian weights unusable: {}", c,
@@ -248,6 +251,7 @@ PoissonSystem<Dim> assemble_poisson(const CellGraph<Dim>& graph, const PoissonPr
   stats.n_rbf_rows = n_rbf;
   stats.n_degree_reduced = n_reduced;
   stats.n_retried = n_retried;
+  stats.n_on_interface = n_on_interface;
 
   const long size = n + (sys.bordered ? 1 : 0);
   std::vector<Eigen::Triplet<double>> triplets;

@@ -52,6 +52,7 @@ struct AssemblyStats {
   long n_rbf_rows = 0;
   long n_degree_reduced = 0;  ///< RBF rows whose stencil could not carry the requested degree
   long n_retried = 0;         ///< RBF rows that needed a node dropped (coincident or singular)
+  long n_on_interface = 0;    ///< centres within 1e-3 cell sizes of the interface, set to its value
   int min_degree = 99;
   double worst_condition = 0.0;
   CellId worst_condition_cell = no_cell;
