@@ -1,6 +1,7 @@
 #include "poisson_study.hpp"
 
 #include <cmath>
+#include <tuple>
 
 #include <fmt/format.h>
 
@@ -102,7 +103,7 @@ CaseResult run_poisson_study(PoissonStudy<Dim> study, const CaseOptions& options
                   "order dp/dn", "assembly s", "solve s", "iterations"});
   Table uniform("uniform grid at the same finest h",
                 {"level", "h", "unknowns", "err p", "err dp/dn", "assembly s", "solve s", "iterations"});
-  std::vector<double> hs, ep, eg, nd, uh, uep, ueg;
+  std::vector<double> hs, ep, eg, nd, uh, uep, ueg, at, ut;  // at/ut: time to solution
   for (int level = study.level_min; level <= study.level_max; ++level) {
     const CellGraph<Dim> graph = study.make_tree(level, tree_options);
     const PoissonRun run = solve_poisson<Dim>(graph, study);
@@ -110,6 +111,7 @@ CaseResult run_poisson_study(PoissonStudy<Dim> study, const CaseOptions& options
     if (!run.solve.converged()) break;
     const std::size_t k = hs.size();
     hs.push_back(run.h), ep.push_back(run.err_p), eg.push_back(run.err_grad), nd.push_back(run.n_unknowns);
+    at.push_back(run.assembly_seconds + run.solve_seconds);
     const Table::Cell op = k ? Table::Cell(pair_order(hs[k - 1], ep[k - 1], hs[k], ep[k])) : Table::Cell{};
     const Table::Cell og = k ? Table::Cell(pair_order(hs[k - 1], eg[k - 1], hs[k], eg[k])) : Table::Cell{};
     result.gate.push_back({fmt::format("level {} err p", level), GateFigure::Kind::error, run.err_p});
@@ -129,6 +131,7 @@ CaseResult run_poisson_study(PoissonStudy<Dim> study, const CaseOptions& options
     const PoissonRun u = solve_poisson<Dim>(flat, study);
     if (!u.solve.converged()) continue;
     uh.push_back(u.h), uep.push_back(u.err_p), ueg.push_back(u.err_grad);
+    ut.push_back(u.assembly_seconds + u.solve_seconds);
     uniform.add_row({long(fine), u.h, u.n_unknowns, u.err_p, u.err_grad, u.assembly_seconds, u.solve_seconds,
                      long(u.solve.iterations)});
   }
@@ -162,6 +165,14 @@ CaseResult run_poisson_study(PoissonStudy<Dim> study, const CaseOptions& options
   if (!uh.empty()) {
     series.push(series_entry("L-inf error of p", "uniform", uh, uep));
     series.push(series_entry("L-inf error of dp/dn", "uniform", uh, ueg));
+  }
+  // Speed against error: seconds to assemble and solve, against the L-inf error of p reached.
+  for (auto [label, e, t] : {std::tuple{"adaptive", &ep, &at}, std::tuple{"uniform", &uep, &ut}}) {
+    if (e->empty()) continue;
+    Json j = series_entry("time to solution against the L-inf error of p", label, *e, *t);
+    j.set("x_label", "L-inf error of p");
+    j.set("y_label", "assembly + solve seconds");
+    series.push(std::move(j));
   }
   result.fields.set("series", std::move(series));
   return result;
