@@ -125,7 +125,7 @@ CaseResult run_poisson_study(PoissonStudy<Dim> study, const CaseOptions& options
                   fmt::format("level {}: NaN error", level));
 
     const int fine = level + study.finest_offset;
-    const double limit = options.full ? 8.0 * study.uniform_limit : study.uniform_limit;
+    const double limit = options.full ? 4.0 * study.uniform_limit : study.uniform_limit;
     if (std::pow(2.0, Dim * fine) > limit) continue;
     const CellGraph<Dim> flat = tree::uniform<Dim>(study.domain, fine, tree_options);
     const PoissonRun u = solve_poisson<Dim>(flat, study);
