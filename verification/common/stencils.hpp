@@ -9,6 +9,20 @@
 
 namespace liquid::verification {
 
+/// The integer offsets of a (2 * half + 1)^Dim block around the origin, axis 0 fastest.
+template <int Dim>
+std::vector<IVec<Dim>> block_offsets(int half) {
+  const int side = 2 * half + 1;
+  int n_total = 1;
+  for (int k = 0; k < Dim; ++k) n_total *= side;
+  std::vector<IVec<Dim>> out(n_total);
+  for (int i = 0; i < n_total; ++i) {
+    int rest = i;
+    for (int k = 0; k < Dim; ++k, rest /= side) out[i][k] = rest % side - half;
+  }
+  return out;
+}
+
 /// A (2 * half + 1)^Dim grid of spacing h around the origin, every node but the centre moved by a
 /// uniform random offset of at most `jitter * h` per axis.
 template <int Dim>
@@ -16,20 +30,9 @@ std::vector<Vec<Dim>> jittered_stencil(int half, double h, double jitter, unsign
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> u(-jitter, jitter);
   std::vector<Vec<Dim>> nodes;
-  const int side = 2 * half + 1;
-  int n_total = 1;
-  for (int k = 0; k < Dim; ++k) n_total *= side;
-  for (int i = 0; i < n_total; ++i) {
-    Vec<Dim> x;
-    int rest = i;
-    bool centre = true;
-    for (int k = 0; k < Dim; ++k) {
-      const int c = rest % side - half;
-      rest /= side;
-      x[k] = c * h;
-      centre = centre && c == 0;
-    }
-    if (!centre)
+  for (const IVec<Dim>& q : block_offsets<Dim>(half)) {
+    Vec<Dim> x = h * q.template cast<double>();
+    if (!q.isZero())
       for (int k = 0; k < Dim; ++k) x[k] += u(rng) * h;
     nodes.push_back(x);
   }
@@ -45,20 +48,9 @@ std::vector<Vec<Dim>> quadtree_stencil(int half, double h, unsigned seed) {
   std::mt19937 rng(seed);
   std::uniform_int_distribution<int> pick(0, 5);
   std::vector<Vec<Dim>> nodes{Vec<Dim>::Zero()};
-  const int side = 2 * half + 1;
-  int n_total = 1;
-  for (int k = 0; k < Dim; ++k) n_total *= side;
-  for (int i = 0; i < n_total; ++i) {
-    Vec<Dim> c;
-    int rest = i;
-    bool centre = true;
-    for (int k = 0; k < Dim; ++k) {
-      const int q = rest % side - half;
-      rest /= side;
-      c[k] = q * h;
-      centre = centre && q == 0;
-    }
-    if (centre) continue;
+  for (const IVec<Dim>& q : block_offsets<Dim>(half)) {
+    if (q.isZero()) continue;
+    const Vec<Dim> c = h * q.template cast<double>();
     const int r = pick(rng);
     const int splits = r < 3 ? 0 : (r < 5 ? 1 : 2);
     const int per_axis = 1 << splits;
