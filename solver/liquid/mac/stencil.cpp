@@ -50,9 +50,21 @@ void candidates(const CellGraph<Dim>& graph, std::span<const CellId> seeds, cons
   const int max_k = 6;
   switch (rule) {
     case StencilRule::ring: {
+      // Laplacian stencils (one seed) also need half the target counted by the area of a side
+      // the cells cover: a cell j levels finer than the centre counts 2^(-(Dim-1) j), so the
+      // 2^((Dim-1) j) cells behind one finer side count as one neighbour. By the plain count alone
+      // a 3D cell with a side two levels finer stopped at its 1-ring (1 + 5 + 16 = 22 >= 21
+      // nodes): 16 nodes on one side, one on each other side, |tau| ~ 3 and sum|w| / diag ~ 6 at
+      // those rows, which carried most of the L-inf error of p. Face stencils keep the plain count.
+      const bool by_area = seeds.size() == 1;
+      const int ref_level = graph.level(seeds[0]);
       for (int k = 1; k <= max_k; ++k) {
         add_ring(k);
-        if (static_cast<int>(out.size()) >= n_target) break;
+        if (static_cast<int>(out.size()) < n_target) continue;
+        if (!by_area) break;
+        double area = 0.0;
+        for (CellId c : out) area += std::ldexp(1.0, -(Dim - 1) * std::max(0, graph.level(c) - ref_level));
+        if (2.0 * area >= n_target) break;
       }
       std::sort(out.begin(), out.end(), by_distance);
       return;
