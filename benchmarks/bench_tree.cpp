@@ -30,11 +30,16 @@ CellGraph<3> make_tree(int which) {
   const Box<3> unit;
   const auto phi = sphere(Vec<3>::Constant(0.5));
   switch (which) {
-    case 0: return tree::uniform<3>(unit, 6);
-    case 1: return tree::banded<3>(unit, phi, 5, 2.0);
-    case 2: return tree::banded<3>(unit, phi, 6, 2.0);
-    case 3: return tree::narrow_band<3>(unit, phi, 1, 9, 1.0);
-    default: return tree::uniform<3>(unit, 7);
+    case 0:
+      return tree::uniform<3>(unit, 6);
+    case 1:
+      return tree::banded<3>(unit, phi, 5, 2.0);
+    case 2:
+      return tree::banded<3>(unit, phi, 6, 2.0);
+    case 3:
+      return tree::narrow_band<3>(unit, phi, 1, 9, 1.0);
+    default:
+      return tree::uniform<3>(unit, 7);
   }
 }
 
@@ -55,7 +60,8 @@ void BM_TreeBuild(benchmark::State& state) {
   }
   state.counters["leaves"] = n_cells;
   state.counters["faces"] = n_faces;
-  state.counters["leaves_per_s"] = benchmark::Counter(static_cast<double>(n_cells), benchmark::Counter::kIsIterationInvariantRate);
+  state.counters["leaves_per_s"] =
+      benchmark::Counter(static_cast<double>(n_cells), benchmark::Counter::kIsIterationInvariantRate);
   state.counters["threads"] = omp_get_max_threads();
 }
 BENCHMARK(BM_TreeBuild)->DenseRange(0, 4)->Unit(benchmark::kMillisecond)->UseRealTime();
@@ -123,7 +129,8 @@ void BM_TreeKRing(benchmark::State& state) {
     }
     benchmark::DoNotOptimize(found);
   }
-  state.counters["queries_per_s"] = benchmark::Counter(static_cast<double>(n_queries), benchmark::Counter::kIsIterationInvariantRate);
+  state.counters["queries_per_s"] =
+      benchmark::Counter(static_cast<double>(n_queries), benchmark::Counter::kIsIterationInvariantRate);
   state.counters["mean_ring"] = static_cast<double>(found) / n_queries;
   state.counters["threads"] = omp_get_max_threads();
 }
@@ -207,7 +214,11 @@ void BM_TreeReadapt(benchmark::State& state) {
   state.counters["build_ns_per_leaf"] = 1e9 * full_build / rebuilt.n_cells();
   state.counters["candidates"] = band_only ? static_cast<double>(candidates.size()) : g.n_cells();
 }
-BENCHMARK(BM_TreeReadapt)->ArgsProduct({{0, 1}, {0, 1}})->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(6);
+BENCHMARK(BM_TreeReadapt)
+    ->ArgsProduct({{0, 1}, {0, 1}})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->Iterations(6);
 
 }  // namespace
 }  // namespace liquid

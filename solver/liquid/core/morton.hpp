@@ -64,9 +64,11 @@ template <int Dim>
 inline std::uint64_t encode(const IVec<Dim>& a) {
   static_assert(Dim == 2 || Dim == 3);
   if constexpr (Dim == 2) {
-    return detail::spread2(static_cast<std::uint64_t>(a[0])) | (detail::spread2(static_cast<std::uint64_t>(a[1])) << 1);
+    return detail::spread2(static_cast<std::uint64_t>(a[0])) |
+           (detail::spread2(static_cast<std::uint64_t>(a[1])) << 1);
   } else {
-    return detail::spread3(static_cast<std::uint64_t>(a[0])) | (detail::spread3(static_cast<std::uint64_t>(a[1])) << 1) |
+    return detail::spread3(static_cast<std::uint64_t>(a[0])) |
+           (detail::spread3(static_cast<std::uint64_t>(a[1])) << 1) |
            (detail::spread3(static_cast<std::uint64_t>(a[2])) << 2);
   }
 }

@@ -47,11 +47,12 @@ class Handle {
   herr_t (*close_)(hid_t);
 };
 
-void write_dataset(hid_t where, const std::string& name, hid_t mem_type, hid_t file_type, std::vector<hsize_t> dims,
-                   const void* data, const std::string& path) {
+void write_dataset(hid_t where, const std::string& name, hid_t mem_type, hid_t file_type,
+                   std::vector<hsize_t> dims, const void* data, const std::string& path) {
   Handle space(H5Screate_simple(static_cast<int>(dims.size()), dims.data(), nullptr), H5Sclose);
   LIQUID_VERIFY(space.ok(), "write_tree: cannot make the dataspace of {} in {}", name, path);
-  Handle set(H5Dcreate2(where, name.c_str(), file_type, space.get(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Dclose);
+  Handle set(H5Dcreate2(where, name.c_str(), file_type, space.get(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT),
+             H5Dclose);
   LIQUID_VERIFY(set.ok(), "write_tree: cannot create dataset {} in {}", name, path);
   LIQUID_VERIFY(H5Dwrite(set.get(), mem_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data) >= 0,
                 "write_tree: cannot write dataset {} in {}", name, path);
@@ -73,23 +74,25 @@ int corner_bit(int k, int d) {
 }
 
 std::string data_item(const std::string& dims, const char* type, int precision, const std::string& ref) {
-  return fmt::format(R"(<DataItem Dimensions="{}" NumberType="{}" Precision="{}" Format="HDF">{}</DataItem>)", dims,
-                     type, precision, ref);
+  return fmt::format(R"(<DataItem Dimensions="{}" NumberType="{}" Precision="{}" Format="HDF">{}</DataItem>)",
+                     dims, type, precision, ref);
 }
 
 }  // namespace
 
 template <int Dim>
-TreeFiles write_tree(const std::string& stem, const CellGraph<Dim>& graph, std::span<const CellField> fields) {
+TreeFiles write_tree(const std::string& stem, const CellGraph<Dim>& graph,
+                     std::span<const CellField> fields) {
   constexpr int n_corners = 1 << Dim;
   for (const CellField& f : fields) {
-    LIQUID_VERIFY(valid_name(f.name),
-                  "write_tree: field name '{}' must be non-empty, not 'level' or 'cell_id', and use only letters, "
-                  "digits, '_', '-', '.'",
-                  f.name);
+    LIQUID_VERIFY(
+        valid_name(f.name),
+        "write_tree: field name '{}' must be non-empty, not 'level' or 'cell_id', and use only letters, "
+        "digits, '_', '-', '.'",
+        f.name);
     LIQUID_VERIFY(f.values.size() >= static_cast<std::size_t>(graph.cell_capacity()),
-                  "write_tree: field '{}' has {} values but the graph's cell ids go up to {}", f.name, f.values.size(),
-                  graph.cell_capacity() - 1);
+                  "write_tree: field '{}' has {} values but the graph's cell ids go up to {}", f.name,
+                  f.values.size(), graph.cell_capacity() - 1);
   }
   const TreeFiles files{stem + ".h5", stem + ".xmf"};
   const std::vector<CellId> ids = graph.cell_ids();
@@ -98,7 +101,7 @@ TreeFiles write_tree(const std::string& stem, const CellGraph<Dim>& graph, std::
   std::vector<double> geometry(n * n_corners * Dim);
   std::vector<std::int64_t> topology(n * n_corners);
   std::vector<std::int32_t> level(n), cell_id(n);
-#pragma omp parallel for schedule(static) if (static_cast<long>(n) > detail::parallel_min)
+#pragma omp parallel for schedule(static) if (static_cast <long>(n) > detail::parallel_min)
   for (long i = 0; i < static_cast<long>(n); ++i) {
     const Box<Dim> b = graph.box(ids[i]);
     for (int k = 0; k < n_corners; ++k) {
@@ -114,9 +117,12 @@ TreeFiles write_tree(const std::string& stem, const CellGraph<Dim>& graph, std::
   {
     QuietHdf5 quiet;
     Handle file(H5Fcreate(h5_tmp.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT), H5Fclose);
-    LIQUID_VERIFY(file.ok(), "write_tree: cannot create {} (does its folder exist and is it writable?)", h5_tmp);
-    write_dataset(file.get(), "geometry", H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE, {n * n_corners, Dim}, geometry.data(), h5_tmp);
-    write_dataset(file.get(), "topology", H5T_NATIVE_INT64, H5T_STD_I64LE, {n, n_corners}, topology.data(), h5_tmp);
+    LIQUID_VERIFY(file.ok(), "write_tree: cannot create {} (does its folder exist and is it writable?)",
+                  h5_tmp);
+    write_dataset(file.get(), "geometry", H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE, {n * n_corners, Dim},
+                  geometry.data(), h5_tmp);
+    write_dataset(file.get(), "topology", H5T_NATIVE_INT64, H5T_STD_I64LE, {n, n_corners}, topology.data(),
+                  h5_tmp);
     write_dataset(file.get(), "level", H5T_NATIVE_INT32, H5T_STD_I32LE, {n}, level.data(), h5_tmp);
     write_dataset(file.get(), "cell_id", H5T_NATIVE_INT32, H5T_STD_I32LE, {n}, cell_id.data(), h5_tmp);
     if (!fields.empty()) {
@@ -134,16 +140,23 @@ TreeFiles write_tree(const std::string& stem, const CellGraph<Dim>& graph, std::
   const std::string h5_name = std::filesystem::path(files.h5).filename().string();
   const std::string cells = std::to_string(n);
   std::string xmf;
-  xmf += "<?xml version=\"1.0\" ?>\n<!DOCTYPE Xdmf SYSTEM \"Xdmf.dtd\" []>\n<Xdmf Version=\"3.0\">\n  <Domain>\n";
+  xmf +=
+      "<?xml version=\"1.0\" ?>\n<!DOCTYPE Xdmf SYSTEM \"Xdmf.dtd\" []>\n<Xdmf Version=\"3.0\">\n  "
+      "<Domain>\n";
   xmf += fmt::format("    <Grid Name=\"cellgraph{}d\" GridType=\"Uniform\">\n", Dim);
-  xmf += fmt::format("      <Topology TopologyType=\"{}\" NumberOfElements=\"{}\">\n        {}\n      </Topology>\n",
-                     Dim == 2 ? "Quadrilateral" : "Hexahedron", cells,
-                     data_item(fmt::format("{} {}", cells, n_corners), "Int", 8, h5_name + ":/topology"));
-  xmf += fmt::format("      <Geometry GeometryType=\"{}\">\n        {}\n      </Geometry>\n", Dim == 2 ? "XY" : "XYZ",
+  xmf += fmt::format(
+      "      <Topology TopologyType=\"{}\" NumberOfElements=\"{}\">\n        {}\n      </Topology>\n",
+      Dim == 2 ? "Quadrilateral" : "Hexahedron", cells,
+      data_item(fmt::format("{} {}", cells, n_corners), "Int", 8, h5_name + ":/topology"));
+  xmf += fmt::format("      <Geometry GeometryType=\"{}\">\n        {}\n      </Geometry>\n",
+                     Dim == 2 ? "XY" : "XYZ",
                      data_item(fmt::format("{} {}", n * n_corners, Dim), "Float", 8, h5_name + ":/geometry"));
-  const auto attribute = [&](const std::string& name, const char* type, int precision, const std::string& path) {
-    xmf += fmt::format("      <Attribute Name=\"{}\" AttributeType=\"Scalar\" Center=\"Cell\">\n        {}\n      </Attribute>\n",
-                       name, data_item(cells, type, precision, h5_name + ":" + path));
+  const auto attribute = [&](const std::string& name, const char* type, int precision,
+                             const std::string& path) {
+    xmf += fmt::format(
+        "      <Attribute Name=\"{}\" AttributeType=\"Scalar\" Center=\"Cell\">\n        {}\n      "
+        "</Attribute>\n",
+        name, data_item(cells, type, precision, h5_name + ":" + path));
   };
   attribute("level", "Int", 4, "/level");
   attribute("cell_id", "Int", 4, "/cell_id");

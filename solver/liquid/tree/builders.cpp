@@ -28,8 +28,8 @@ double distance_bound(const TreeNode<Dim>& node, const LevelSet<Dim>& phi) {
 
 template <int Dim>
 void check_levels(int a, int b, const char* what) {
-  LIQUID_VERIFY(a >= 0 && a <= b && b <= morton::max_level<Dim>, "tree::{}: levels must satisfy 0 <= {} <= {} <= {}",
-                what, a, b, morton::max_level<Dim>);
+  LIQUID_VERIFY(a >= 0 && a <= b && b <= morton::max_level<Dim>,
+                "tree::{}: levels must satisfy 0 <= {} <= {} <= {}", what, a, b, morton::max_level<Dim>);
 }
 
 }  // namespace
@@ -59,8 +59,8 @@ CellGraph<Dim> banded(const Box<Dim>& domain, const LevelSet<Dim>& phi, int leve
 }
 
 template <int Dim>
-bool narrow_band_refines(const TreeNode<Dim>& node, const LevelSet<Dim>& phi, int coarse_level, int fine_level,
-                         double band, double fine_size) {
+bool narrow_band_refines(const TreeNode<Dim>& node, const LevelSet<Dim>& phi, int coarse_level,
+                         int fine_level, double band, double fine_size) {
   if (node.level < coarse_level) return true;
   if (node.level >= fine_level) return false;
   return distance_bound(node, phi) < band * fine_size;
@@ -129,14 +129,15 @@ CellGraph<Dim> random(const Box<Dim>& domain, std::uint64_t seed, int min_level,
       options);
 }
 
-#define LIQUID_TREE_BUILDERS(D)                                                                                  \
-  template CellGraph<D> uniform<D>(const Box<D>&, int, const CellGraphOptions<D>&);                              \
-  template CellGraph<D> banded<D>(const Box<D>&, const LevelSet<D>&, int, double, const CellGraphOptions<D>&);   \
-  template bool narrow_band_refines<D>(const TreeNode<D>&, const LevelSet<D>&, int, int, double, double);        \
-  template CellGraph<D> narrow_band<D>(const Box<D>&, const LevelSet<D>&, int, int, double,                      \
-                                       const CellGraphOptions<D>&);                                              \
-  template void mark_narrow_band<D>(const CellGraph<D>&, const LevelSet<D>&, int, int, double, std::vector<Mark>&, \
-                                    const std::vector<CellId>*);                                                 \
+#define LIQUID_TREE_BUILDERS(D)                                                                           \
+  template CellGraph<D> uniform<D>(const Box<D>&, int, const CellGraphOptions<D>&);                       \
+  template CellGraph<D> banded<D>(const Box<D>&, const LevelSet<D>&, int, double,                         \
+                                  const CellGraphOptions<D>&);                                            \
+  template bool narrow_band_refines<D>(const TreeNode<D>&, const LevelSet<D>&, int, int, double, double); \
+  template CellGraph<D> narrow_band<D>(const Box<D>&, const LevelSet<D>&, int, int, double,               \
+                                       const CellGraphOptions<D>&);                                       \
+  template void mark_narrow_band<D>(const CellGraph<D>&, const LevelSet<D>&, int, int, double,            \
+                                    std::vector<Mark>&, const std::vector<CellId>*);                      \
   template CellGraph<D> random<D>(const Box<D>&, std::uint64_t, int, int, double, CellGraphOptions<D>);
 LIQUID_TREE_BUILDERS(2)
 LIQUID_TREE_BUILDERS(3)

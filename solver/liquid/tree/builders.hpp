@@ -36,8 +36,8 @@ CellGraph<Dim> narrow_band(const Box<Dim>& domain, const LevelSet<Dim>& phi, int
 
 /// The refinement rule of narrow_band() for one node (true: split it).
 template <int Dim>
-bool narrow_band_refines(const TreeNode<Dim>& node, const LevelSet<Dim>& phi, int coarse_level, int fine_level,
-                         double band, double fine_size);
+bool narrow_band_refines(const TreeNode<Dim>& node, const LevelSet<Dim>& phi, int coarse_level,
+                         int fine_level, double band, double fine_size);
 
 /// Marks an existing graph towards narrow_band(phi, coarse_level, fine_level, band): split where
 /// the rule refines a leaf, merge where it would not refine the leaf's parent. Only the cells in

@@ -174,7 +174,8 @@ void CellGraph<Dim>::kill_cell(CellId c) {
 }
 
 template <int Dim>
-FaceId CellGraph<Dim>::add_face(CellId minus, CellId plus, int axis, int boundary, int level_minus, int level_plus) {
+FaceId CellGraph<Dim>::add_face(CellId minus, CellId plus, int axis, int boundary, int level_minus,
+                                int level_plus) {
   FaceId f;
   if (!free_faces_.empty()) {
     f = free_faces_.back();
@@ -222,7 +223,8 @@ void CellGraph<Dim>::detach(FaceId f, int side) {
   if (c == no_cell) return;
   auto& list = cells_[c].faces;
   const std::int32_t i = g.slot[side];
-  LIQUID_ASSERT(i >= 0 && i < static_cast<std::int32_t>(list.size()) && list[i] == f, "CellGraph: face {} slot broken", f);
+  LIQUID_ASSERT(i >= 0 && i < static_cast<std::int32_t>(list.size()) && list[i] == f,
+                "CellGraph: face {} slot broken", f);
   const FaceId last = list.back();
   list[i] = last;
   GraphFace& h = faces_[last];
@@ -264,7 +266,8 @@ CellId CellGraph<Dim>::locate(const Vec<Dim>& x) const {
   const std::int64_t top = (std::int64_t{1} << L) - 1;
   IVec<Dim> q;
   for (int d = 0; d < Dim; ++d) {
-    LIQUID_VERIFY(std::isfinite(x[d]), "CellGraph::locate: coordinate {} of the point is not finite ({})", d, x[d]);
+    LIQUID_VERIFY(std::isfinite(x[d]), "CellGraph::locate: coordinate {} of the point is not finite ({})", d,
+                  x[d]);
     const double t = (x[d] - domain_.lo[d]) / (domain_.hi[d] - domain_.lo[d]) * n;
     q[d] = t <= 0.0 ? 0 : (t >= static_cast<double>(top) ? top : static_cast<std::int64_t>(t));
   }

@@ -48,9 +48,9 @@ inline constexpr int unlimited_jump = 1 << 20;
 
 template <int Dim>
 struct CellGraphOptions {
-  int max_jump = 2;                          ///< largest level difference across a face (1 = graded); or unlimited_jump
-  int min_level = 0;                         ///< adapt() never merges below this level
-  int max_level = morton::max_level<Dim>;    ///< no cell is ever split beyond this level
+  int max_jump = 2;   ///< largest level difference across a face (1 = graded); or unlimited_jump
+  int min_level = 0;  ///< adapt() never merges below this level
+  int max_level = morton::max_level<Dim>;  ///< no cell is ever split beyond this level
 };
 
 /// A node of the tree as the refinement predicate of CellGraph::build sees it.
@@ -63,11 +63,11 @@ struct TreeNode {
 
 /// One face (graph edge). Side 0 is the cell at the lower coordinate along `axis`, side 1 the upper.
 struct GraphFace {
-  std::array<CellId, 2> cell{no_cell, no_cell};  ///< no_cell on the outside of a boundary face
+  std::array<CellId, 2> cell{no_cell, no_cell};   ///< no_cell on the outside of a boundary face
   std::array<std::int8_t, 2> side_level{-1, -1};  ///< level of each side's cell; -1 outside
   std::int8_t axis = 0;                           ///< normal axis
-  std::int8_t boundary = -1;                      ///< -1 interior; else the domain side 2*axis + (0 lower, 1 upper)
-  std::array<std::int32_t, 2> slot{-1, -1};       ///< (internal) position in each side's face list
+  std::int8_t boundary = -1;  ///< -1 interior; else the domain side 2*axis + (0 lower, 1 upper)
+  std::array<std::int32_t, 2> slot{-1, -1};  ///< (internal) position in each side's face list
 
   /// Level of the face itself: that of its finer side.
   int level() const { return side_level[0] > side_level[1] ? side_level[0] : side_level[1]; }
@@ -117,11 +117,11 @@ struct AdaptReport {
                          ///< the area-weighted union of old faces, or for a face inside a split cell
                          ///< the mean of that cell's two sides along the face's axis
 
-  long n_split = 0;            ///< cells split, balancing splits included
-  long n_balance_splits = 0;   ///< of which forced by the level-jump limit
-  long n_merged = 0;           ///< sibling groups merged
-  long n_refused_split = 0;    ///< split marks refused (at the maximum level)
-  long n_refused_merge = 0;    ///< merge-marked cells that stayed (jump limit, min level, group incomplete)
+  long n_split = 0;           ///< cells split, balancing splits included
+  long n_balance_splits = 0;  ///< of which forced by the level-jump limit
+  long n_merged = 0;          ///< sibling groups merged
+  long n_refused_split = 0;   ///< split marks refused (at the maximum level)
+  long n_refused_merge = 0;   ///< merge-marked cells that stayed (jump limit, min level, group incomplete)
 
   bool empty() const { return new_cells.empty() && removed_cells.empty(); }
 };
@@ -149,14 +149,15 @@ class CellGraph {
   /// options.min_level, never at options.max_level), then coarse leaves are split until the level
   /// jump holds. Cells of the predicate's tree are numbered in Morton order, cells added by the
   /// balancing after them. Evaluates `refine` from several threads at once.
-  static CellGraph build(const Box<Dim>& domain, const Predicate& refine, const CellGraphOptions<Dim>& options = {});
+  static CellGraph build(const Box<Dim>& domain, const Predicate& refine,
+                         const CellGraphOptions<Dim>& options = {});
 
   // ---- sizes and settings
   const Box<Dim>& domain() const { return domain_; }
   const CellGraphOptions<Dim>& options() const { return options_; }
   int max_jump() const { return options_.max_jump; }
-  int n_cells() const { return n_cells_; }  ///< alive cells (leaves)
-  int n_faces() const { return n_faces_; }  ///< alive faces
+  int n_cells() const { return n_cells_; }                               ///< alive cells (leaves)
+  int n_faces() const { return n_faces_; }                               ///< alive faces
   int cell_capacity() const { return static_cast<int>(cells_.size()); }  ///< largest cell id + 1
   int face_capacity() const { return static_cast<int>(faces_.size()); }  ///< largest face id + 1
   int deepest_level() const { return deepest_; }
@@ -298,9 +299,9 @@ class CellGraph {
   std::vector<FaceId> born_faces_, pending_free_faces_, removed_faces_;
   std::vector<std::array<CellId, n_children>> cell_origin_;  // per born cell (index in born_cells_)
   std::vector<std::int8_t> cell_origin_count_;
-  std::vector<std::int32_t> cell_log_index_;                 // cell id -> index in born_cells_
-  std::vector<FaceOriginRecord> face_origin_;                // per born face
-  std::vector<std::int32_t> face_log_index_;                 // face id -> index in born_faces_
+  std::vector<std::int32_t> cell_log_index_;   // cell id -> index in born_cells_
+  std::vector<FaceOriginRecord> face_origin_;  // per born face
+  std::vector<std::int32_t> face_log_index_;   // face id -> index in born_faces_
   std::vector<FaceId> log_source_;
   std::vector<double> log_weight_;
 };

@@ -51,7 +51,9 @@ class FaceSweep {
       for (int i = 0; i < n_children; ++i) out[n++] = Item{inside, 0, 0, child(it.a, i), -1};
       for (int d = 0; d < Dim; ++d)
         for (int i = 0; i < n_children; ++i)
-          if (!((i >> d) & 1)) out[n++] = Item{across, static_cast<std::int8_t>(d), 0, child(it.a, i), child(it.a, i | (1 << d))};
+          if (!((i >> d) & 1))
+            out[n++] =
+                Item{across, static_cast<std::int8_t>(d), 0, child(it.a, i), child(it.a, i | (1 << d))};
     } else if (it.kind == across) {
       for (int j = 0; j < n_children / 2; ++j) {
         const std::int32_t a = it.a >= 0 ? it.a : child(it.a, side_child<Dim>(it.axis, 1, j));
@@ -144,7 +146,8 @@ CellGraph<Dim> CellGraph<Dim>::build(const Box<Dim>& domain, const Predicate& re
 #pragma omp parallel for schedule(static) if (n > detail::parallel_min)
     for (long i = 0; i < n; ++i)
       if (first_child[l][i] >= 0)
-        for (int c = 0; c < n_children; ++c) next[first_child[l][i] + c] = morton::child_key<Dim>(keys[l][i], c);
+        for (int c = 0; c < n_children; ++c)
+          next[first_child[l][i] + c] = morton::child_key<Dim>(keys[l][i], c);
     keys.push_back(std::move(next));
   }
   const int n_levels = static_cast<int>(keys.size());
@@ -170,7 +173,8 @@ CellGraph<Dim> CellGraph<Dim>::build(const Box<Dim>& domain, const Predicate& re
   first_leaf[0] = {0};
   std::vector<std::int64_t> block_base(n_levels + 1, 0);  // first block id of each level's interior nodes
   for (int l = 0; l < n_levels; ++l)
-    block_base[l + 1] = block_base[l] + (l + 1 < n_levels ? static_cast<std::int64_t>(keys[l + 1].size()) / n_children : 0);
+    block_base[l + 1] =
+        block_base[l] + (l + 1 < n_levels ? static_cast<std::int64_t>(keys[l + 1].size()) / n_children : 0);
   for (int l = 0; l + 1 < n_levels; ++l) {
     const long n = static_cast<long>(keys[l].size());
     first_leaf[l + 1].resize(keys[l + 1].size());
@@ -283,7 +287,7 @@ CellGraph<Dim> CellGraph<Dim>::build(const Box<Dim>& domain, const Predicate& re
     for (const GraphFace& f : g.faces_)
       for (int s = 0; s < 2; ++s)
         if (f.cell[s] != no_cell) ++degree[f.cell[s]];
-#pragma omp parallel for schedule(static) if (static_cast<long>(n_cells) > detail::parallel_min)
+#pragma omp parallel for schedule(static) if (static_cast <long>(n_cells) > detail::parallel_min)
     for (long c = 0; c < static_cast<long>(n_cells); ++c) g.cells_[c].faces.reserve(degree[c]);
   }
   for (FaceId f = 0; f < static_cast<FaceId>(n_faces); ++f) {
@@ -307,7 +311,7 @@ CellGraph<Dim> CellGraph<Dim>::build(const Box<Dim>& domain, const Predicate& re
     std::vector<CellId> coarse;
     {
       std::vector<std::vector<CellId>> per_thread(omp_get_max_threads());
-#pragma omp parallel for schedule(static) if (static_cast<long>(n_faces) > detail::parallel_min)
+#pragma omp parallel for schedule(static) if (static_cast <long>(n_faces) > detail::parallel_min)
       for (long f = 0; f < static_cast<long>(n_faces); ++f) {
         const CellId c = coarser_if_broken(static_cast<FaceId>(f));
         if (c != no_cell) per_thread[omp_get_thread_num()].push_back(c);

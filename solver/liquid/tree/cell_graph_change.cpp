@@ -276,8 +276,8 @@ CellId CellGraph<Dim>::merge_raw(const std::array<CellId, n_children>& ch) {
 template <int Dim>
 std::array<CellId, CellGraph<Dim>::n_children> CellGraph<Dim>::split(CellId c, AdaptReport* report) {
   LIQUID_VERIFY(alive(c), "CellGraph::split: cell {} is not alive", c);
-  LIQUID_VERIFY(cells_[c].level < options_.max_level, "CellGraph::split: cell {} is at the maximum level {}", c,
-                options_.max_level);
+  LIQUID_VERIFY(cells_[c].level < options_.max_level, "CellGraph::split: cell {} is at the maximum level {}",
+                c, options_.max_level);
   const std::uint64_t k = cells_[c].key;
   AdaptReport local;
   AdaptReport& r = report != nullptr ? *report : local;
@@ -292,13 +292,15 @@ std::array<CellId, CellGraph<Dim>::n_children> CellGraph<Dim>::split(CellId c, A
 
 template <int Dim>
 CellId CellGraph<Dim>::merge(std::span<const CellId> group, AdaptReport* report) {
-  LIQUID_VERIFY(are_siblings(group), "CellGraph::merge: the {} cells given are not the {} leaf children of one parent",
+  LIQUID_VERIFY(are_siblings(group),
+                "CellGraph::merge: the {} cells given are not the {} leaf children of one parent",
                 group.size(), n_children);
   std::array<CellId, n_children> ch;
   for (CellId c : group) ch[morton::child_index<Dim>(cells_[c].key)] = c;
-  LIQUID_VERIFY(merge_allowed(ch),
-                "CellGraph::merge: merging cell {}'s siblings (level {}) would break min_level {} or the level jump {}",
-                ch[0], cells_[ch[0]].level, options_.min_level, options_.max_jump);
+  LIQUID_VERIFY(
+      merge_allowed(ch),
+      "CellGraph::merge: merging cell {}'s siblings (level {}) would break min_level {} or the level jump {}",
+      ch[0], cells_[ch[0]].level, options_.min_level, options_.max_jump);
   if (report != nullptr) *report = AdaptReport{};
   begin_change();
   const CellId p = merge_raw(ch);
@@ -336,7 +338,8 @@ AdaptReport CellGraph<Dim>::adapt(std::span<const Mark> marks) {
     if (!group) continue;
     bool all = true;
     for (CellId s : *group)
-      all = all && cell_birth_[s] < epoch_ && static_cast<std::size_t>(s) < marks.size() && marks[s] == Mark::merge;
+      all = all && cell_birth_[s] < epoch_ && static_cast<std::size_t>(s) < marks.size() &&
+            marks[s] == Mark::merge;
     if (!all || !merge_allowed(*group)) continue;
     merge_raw(*group);
     ++r.n_merged;
@@ -348,16 +351,16 @@ AdaptReport CellGraph<Dim>::adapt(std::span<const Mark> marks) {
 }
 
 // The class itself is instantiated in cell_graph.cpp; this file instantiates the members it defines.
-#define LIQUID_CELL_GRAPH_CHANGE(D)                                                                        \
-  template void CellGraph<D>::begin_change();                                                              \
-  template void CellGraph<D>::end_change(AdaptReport*);                                                    \
-  template void CellGraph<D>::face_terms(FaceId, double, std::vector<std::pair<FaceId, double>>&) const;   \
-  template void CellGraph<D>::record_face_origin(FaceId, const std::vector<std::pair<FaceId, double>>&);   \
-  template void CellGraph<D>::split_raw(CellId);                                                           \
-  template void CellGraph<D>::split_balanced(CellId, AdaptReport&);                                        \
-  template CellId CellGraph<D>::merge_raw(const std::array<CellId, CellGraph<D>::n_children>&);            \
-  template std::array<CellId, CellGraph<D>::n_children> CellGraph<D>::split(CellId, AdaptReport*);         \
-  template CellId CellGraph<D>::merge(std::span<const CellId>, AdaptReport*);                              \
+#define LIQUID_CELL_GRAPH_CHANGE(D)                                                                      \
+  template void CellGraph<D>::begin_change();                                                            \
+  template void CellGraph<D>::end_change(AdaptReport*);                                                  \
+  template void CellGraph<D>::face_terms(FaceId, double, std::vector<std::pair<FaceId, double>>&) const; \
+  template void CellGraph<D>::record_face_origin(FaceId, const std::vector<std::pair<FaceId, double>>&); \
+  template void CellGraph<D>::split_raw(CellId);                                                         \
+  template void CellGraph<D>::split_balanced(CellId, AdaptReport&);                                      \
+  template CellId CellGraph<D>::merge_raw(const std::array<CellId, CellGraph<D>::n_children>&);          \
+  template std::array<CellId, CellGraph<D>::n_children> CellGraph<D>::split(CellId, AdaptReport*);       \
+  template CellId CellGraph<D>::merge(std::span<const CellId>, AdaptReport*);                            \
   template AdaptReport CellGraph<D>::adapt(std::span<const Mark>);
 LIQUID_CELL_GRAPH_CHANGE(2)
 LIQUID_CELL_GRAPH_CHANGE(3)

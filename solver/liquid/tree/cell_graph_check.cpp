@@ -44,23 +44,28 @@ InvariantReport CellGraph<Dim>::check_invariants() const {
     ++per_level[l];
     volume += U{1} << (Dim * (D - l));
     bool address_ok = true;
-    for (int d = 0; d < Dim; ++d) address_ok = address_ok && cell.address[d] >= 0 && cell.address[d] < (std::int64_t{1} << l);
+    for (int d = 0; d < Dim; ++d)
+      address_ok = address_ok && cell.address[d] >= 0 && cell.address[d] < (std::int64_t{1} << l);
     if (!address_ok) {
       fail(fmt::format("cell {} (level {}) has an address outside its level's pyramid", c, l));
       continue;
     }
-    if (cell.key != morton::key<Dim>(l, cell.address)) fail(fmt::format("cell {}: key does not encode its level and address", c));
+    if (cell.key != morton::key<Dim>(l, cell.address))
+      fail(fmt::format("cell {}: key does not encode its level and address", c));
     if (nodes_.find(cell.key) != c) fail(fmt::format("cell {}: its key does not map back to it", c));
     for (int up = 1; up <= l; ++up)
       if (nodes_.find(morton::ancestor_key<Dim>(cell.key, up)) != detail::NodeIndex<Dim>::interior)
-        fail(fmt::format("cell {}: its ancestor {} levels up is not an interior node (overlapping leaves)", c, up));
+        fail(fmt::format("cell {}: its ancestor {} levels up is not an interior node (overlapping leaves)", c,
+                         up));
     for (int i = 0; i < n_children; ++i)
-      if (nodes_.contains(morton::child_key<Dim>(cell.key, i))) fail(fmt::format("cell {} has a descendant in the tree", c));
+      if (nodes_.contains(morton::child_key<Dim>(cell.key, i)))
+        fail(fmt::format("cell {} has a descendant in the tree", c));
     const Box<Dim> b = box(c);
     for (int d = 0; d < Dim; ++d)
       if (b.lo[d] < domain_.lo[d] || b.hi[d] > domain_.hi[d] || !(b.lo[d] < b.hi[d]))
         fail(fmt::format("cell {}: box outside the domain along axis {}", c, d));
-    if (locate(centre(c)) != c) fail(fmt::format("cell {}: locating its centre finds cell {}", c, locate(centre(c))));
+    if (locate(centre(c)) != c)
+      fail(fmt::format("cell {}: locating its centre finds cell {}", c, locate(centre(c))));
 
     // Face list: back references, and the faces of each side tile it.
     std::array<U, n_sides> side_area{};
@@ -86,9 +91,11 @@ InvariantReport CellGraph<Dim>::check_invariants() const {
         fail(fmt::format("cell {} (level {}): faces on side {} do not tile it", c, l, side));
   }
   if (n_alive != n_cells_) fail(fmt::format("n_cells() is {} but {} cells are alive", n_cells_, n_alive));
-  if (n_leaf_entries != n_alive) fail(fmt::format("the key map holds {} leaves for {} alive cells", n_leaf_entries, n_alive));
+  if (n_leaf_entries != n_alive)
+    fail(fmt::format("the key map holds {} leaves for {} alive cells", n_leaf_entries, n_alive));
   for (std::size_t l = 0; l < per_level.size(); ++l)
-    if (per_level[l] != n_at_level_[l]) fail(fmt::format("level {} counts {} cells, {} recorded", l, per_level[l], n_at_level_[l]));
+    if (per_level[l] != n_at_level_[l])
+      fail(fmt::format("level {} counts {} cells, {} recorded", l, per_level[l], n_at_level_[l]));
   if (n_alive > 0 && volume != (U{1} << (Dim * D))) fail("leaf volumes do not add up to the domain");
   if (n_alive > 0 && n_at_level_[D] == 0) fail(fmt::format("deepest level {} holds no cell", D));
 
@@ -114,7 +121,9 @@ InvariantReport CellGraph<Dim>::check_invariants() const {
         sides_ok = false;
         continue;
       }
-      if (g.side_level[s] != cells_[c].level) fail(fmt::format("face {}: side {} level {} but cell {} has level {}", f, s, g.side_level[s], c, cells_[c].level));
+      if (g.side_level[s] != cells_[c].level)
+        fail(fmt::format("face {}: side {} level {} but cell {} has level {}", f, s, g.side_level[s], c,
+                         cells_[c].level));
       const auto& list = cells_[c].faces;
       if (g.slot[s] < 0 || g.slot[s] >= static_cast<std::int32_t>(list.size()) || list[g.slot[s]] != f)
         fail(fmt::format("face {}: not at its slot in cell {}'s face list", f, c));
@@ -129,23 +138,29 @@ InvariantReport CellGraph<Dim>::check_invariants() const {
       const int s_in = m == no_cell ? 1 : 0;
       const CellId c = g.cell[s_in];
       const int expect = 2 * ax + (s_in == 1 ? 0 : 1);
-      if (g.boundary != expect) fail(fmt::format("face {}: boundary side {} but expected {}", f, g.boundary, expect));
+      if (g.boundary != expect)
+        fail(fmt::format("face {}: boundary side {} but expected {}", f, g.boundary, expect));
       const bool on_side = s_in == 1 ? lo(c, ax) == 0 : hi(c, ax) == (std::int64_t{1} << D);
-      if (!on_side) fail(fmt::format("face {}: boundary face of cell {} is not on the domain boundary", f, c));
+      if (!on_side)
+        fail(fmt::format("face {}: boundary face of cell {} is not on the domain boundary", f, c));
       continue;
     }
     if (g.boundary != -1) fail(fmt::format("face {}: interior face marked as boundary {}", f, g.boundary));
-    if (hi(m, ax) != lo(p, ax)) fail(fmt::format("face {}: cells {} and {} do not touch along axis {}", f, m, p, ax));
+    if (hi(m, ax) != lo(p, ax))
+      fail(fmt::format("face {}: cells {} and {} do not touch along axis {}", f, m, p, ax));
     const CellId fine = cells_[m].level >= cells_[p].level ? m : p;
     const CellId coarse = fine == m ? p : m;
     for (int d = 0; d < Dim; ++d)
       if (d != ax && (lo(fine, d) < lo(coarse, d) || hi(fine, d) > hi(coarse, d)))
-        fail(fmt::format("face {}: finer cell {} is not within cell {}'s side along axis {}", f, fine, coarse, d));
+        fail(fmt::format("face {}: finer cell {} is not within cell {}'s side along axis {}", f, fine, coarse,
+                         d));
     const int jump = std::abs(cells_[m].level - cells_[p].level);
     if (jump > options_.max_jump)
-      fail(fmt::format("face {}: level jump {} between cells {} and {} exceeds {}", f, jump, m, p, options_.max_jump));
+      fail(fmt::format("face {}: level jump {} between cells {} and {} exceeds {}", f, jump, m, p,
+                       options_.max_jump));
   }
-  if (n_alive_faces != n_faces_) fail(fmt::format("n_faces() is {} but {} faces are alive", n_faces_, n_alive_faces));
+  if (n_alive_faces != n_faces_)
+    fail(fmt::format("n_faces() is {} but {} faces are alive", n_faces_, n_alive_faces));
   return r;
 }
 

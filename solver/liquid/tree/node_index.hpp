@@ -33,7 +33,7 @@ class NodeIndex {
  public:
   static constexpr int n_children = 1 << Dim;
   static constexpr std::int32_t absent = KeyMap::absent;  ///< find(): no such node
-  static constexpr std::int32_t interior = -1;           ///< find(): an interior node
+  static constexpr std::int32_t interior = -1;            ///< find(): an interior node
   using Block = std::array<std::int32_t, n_children>;
 
   /// The tree with one node, the root, as leaf `cell`.
@@ -99,7 +99,8 @@ class NodeIndex {
   void assign(std::int32_t root, std::vector<Block> blocks, const std::vector<std::uint64_t>& interior_keys) {
     map_.clear();
     map_.reserve(interior_keys.size());
-    for (std::size_t b = 0; b < interior_keys.size(); ++b) map_.set(interior_keys[b], static_cast<std::int32_t>(b));
+    for (std::size_t b = 0; b < interior_keys.size(); ++b)
+      map_.set(interior_keys[b], static_cast<std::int32_t>(b));
     blocks_ = std::move(blocks);
     free_blocks_.clear();
     root_ = root;

@@ -21,7 +21,8 @@ namespace detail {
 template <class T>
 void apply(const std::vector<std::int32_t>& new_ids, const Origins& origins, std::size_t capacity,
            std::vector<T>& field, const char* what) {
-  LIQUID_VERIFY(origins.size() == new_ids.size(), "remap: the report's {} origins do not match its new ids", what);
+  LIQUID_VERIFY(origins.size() == new_ids.size(), "remap: the report's {} origins do not match its new ids",
+                what);
   const std::size_t old_size = field.size();
   for (std::int32_t s : origins.source)
     LIQUID_VERIFY(static_cast<std::size_t>(s) < old_size,
@@ -44,14 +45,16 @@ void apply(const std::vector<std::int32_t>& new_ids, const Origins& origins, std
 /// grows it to graph.cell_capacity(). T: double, or any type with T * double and +=.
 template <int Dim, class T>
 void cell_field(const CellGraph<Dim>& graph, const AdaptReport& report, std::vector<T>& field) {
-  detail::apply(report.new_cells, report.cell_origins, static_cast<std::size_t>(graph.cell_capacity()), field, "cell");
+  detail::apply(report.new_cells, report.cell_origins, static_cast<std::size_t>(graph.cell_capacity()), field,
+                "cell");
 }
 
 /// Remaps a face field (in/out, indexed by face id) across the change described by `report`;
 /// grows it to graph.face_capacity().
 template <int Dim, class T>
 void face_field(const CellGraph<Dim>& graph, const AdaptReport& report, std::vector<T>& field) {
-  detail::apply(report.new_faces, report.face_origins, static_cast<std::size_t>(graph.face_capacity()), field, "face");
+  detail::apply(report.new_faces, report.face_origins, static_cast<std::size_t>(graph.face_capacity()), field,
+                "face");
 }
 
 }  // namespace liquid::remap

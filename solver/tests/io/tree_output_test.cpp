@@ -59,7 +59,8 @@ TYPED_TEST(TreeOutputTest, XdmfReferencesMatchTheHdf5Datasets) {
   std::stringstream text;
   text << in.rdbuf();
   const std::string xmf = text.str();
-  EXPECT_NE(xmf.find(Dim == 2 ? "TopologyType=\"Quadrilateral\"" : "TopologyType=\"Hexahedron\""), std::string::npos);
+  EXPECT_NE(xmf.find(Dim == 2 ? "TopologyType=\"Quadrilateral\"" : "TopologyType=\"Hexahedron\""),
+            std::string::npos);
   EXPECT_NE(xmf.find("NumberOfElements=\"" + std::to_string(g.n_cells()) + "\""), std::string::npos);
 
   const hid_t file = H5Fopen(files.h5.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);

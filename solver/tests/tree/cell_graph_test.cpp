@@ -200,8 +200,9 @@ TYPED_TEST(CellGraphTest, BulkBuildEqualsIncrementalSplits) {
     const CellGraph<Dim> bulk = tree::random<Dim>(domain, 7 + jump, 1, Dim == 2 ? 6 : 4, 0.3, options);
     expect_ok(bulk);
     // The random predicate's own tree (no balancing), split top-down; balancing forces the rest.
-    const CellGraph<Dim> raw = tree::random<Dim>(domain, 7 + jump, 1, Dim == 2 ? 6 : 4, 0.3,
-                                                 CellGraphOptions<Dim>{unlimited_jump, 0, morton::max_level<Dim>});
+    const CellGraph<Dim> raw =
+        tree::random<Dim>(domain, 7 + jump, 1, Dim == 2 ? 6 : 4, 0.3,
+                          CellGraphOptions<Dim>{unlimited_jump, 0, morton::max_level<Dim>});
     std::vector<std::uint64_t> interior;
     for (std::uint64_t k : leaf_set(raw))
       for (std::uint64_t a = k >> Dim; a >= 1; a >>= Dim) interior.push_back(a);

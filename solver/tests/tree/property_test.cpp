@@ -19,10 +19,10 @@ namespace {
 template <int Dim>
 class Property {
  public:
-  Property(int jump, std::uint64_t seed)
-      : rng_(seed), graph_(make(jump, seed)) {
+  Property(int jump, std::uint64_t seed) : rng_(seed), graph_(make(jump, seed)) {
     cell_.resize(graph_.cell_capacity());
-    for (CellId c = 0; c < graph_.cell_capacity(); ++c) cell_[c] = std::uniform_real_distribution<double>(-1, 1)(rng_);
+    for (CellId c = 0; c < graph_.cell_capacity(); ++c)
+      cell_[c] = std::uniform_real_distribution<double>(-1, 1)(rng_);
     face_.resize(graph_.face_capacity());
     graph_.for_each_face([&](FaceId f) { face_[f] = 1.0 + graph_.face(f).axis; });
     integral_ = integral();
@@ -161,16 +161,36 @@ void run(int jump, int n_ops) {
   }
 }
 
-TEST(CellGraphProperty, Graded2D) { run<2>(1, 1200); }
-TEST(CellGraphProperty, Jump2In2D) { run<2>(2, 1200); }
-TEST(CellGraphProperty, Jump3In2D) { run<2>(3, 1200); }
-TEST(CellGraphProperty, Jump4In2D) { run<2>(4, 1200); }
-TEST(CellGraphProperty, Unlimited2D) { run<2>(unlimited_jump, 1200); }
-TEST(CellGraphProperty, Graded3D) { run<3>(1, 600); }
-TEST(CellGraphProperty, Jump2In3D) { run<3>(2, 600); }
-TEST(CellGraphProperty, Jump3In3D) { run<3>(3, 600); }
-TEST(CellGraphProperty, Jump4In3D) { run<3>(4, 600); }
-TEST(CellGraphProperty, Unlimited3D) { run<3>(unlimited_jump, 600); }
+TEST(CellGraphProperty, Graded2D) {
+  run<2>(1, 1200);
+}
+TEST(CellGraphProperty, Jump2In2D) {
+  run<2>(2, 1200);
+}
+TEST(CellGraphProperty, Jump3In2D) {
+  run<2>(3, 1200);
+}
+TEST(CellGraphProperty, Jump4In2D) {
+  run<2>(4, 1200);
+}
+TEST(CellGraphProperty, Unlimited2D) {
+  run<2>(unlimited_jump, 1200);
+}
+TEST(CellGraphProperty, Graded3D) {
+  run<3>(1, 600);
+}
+TEST(CellGraphProperty, Jump2In3D) {
+  run<3>(2, 600);
+}
+TEST(CellGraphProperty, Jump3In3D) {
+  run<3>(3, 600);
+}
+TEST(CellGraphProperty, Jump4In3D) {
+  run<3>(4, 600);
+}
+TEST(CellGraphProperty, Unlimited3D) {
+  run<3>(unlimited_jump, 600);
+}
 
 }  // namespace
 }  // namespace liquid

@@ -66,7 +66,8 @@ TYPED_TEST(RemapTest, NormalCoordinateFaceFieldStaysExact) {
       });
       const AdaptReport report = g.adapt(marks);
       remap::face_field(g, report, u);
-      g.for_each_face([&](FaceId f) { ASSERT_NEAR(u[f], exact(f), 1e-13) << "face " << f << " step " << step; });
+      g.for_each_face(
+          [&](FaceId f) { ASSERT_NEAR(u[f], exact(f), 1e-13) << "face " << f << " step " << step; });
     }
   }
 }
