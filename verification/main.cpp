@@ -72,7 +72,7 @@ int main(int argc, char** argv) {
   auto* list = app.add_subcommand("list", "list the verification cases");
 
   std::string case_name, json_path, md_path, levels, solver, stencil;
-  int max_jump = -1;
+  int max_jump = -1, rbf_exponent = -1, rbf_degree = -1, gradient_degree = -1;
   bool full = false;
   auto* run = app.add_subcommand("run", "run one case and print its tables");
   run->add_option("case", case_name, "case name (see list)")->required();
@@ -82,6 +82,9 @@ int main(int argc, char** argv) {
   run->add_option("--max-jump", max_jump, "largest level jump between neighbouring cells");
   run->add_option("--solver", solver, "linear solver name");
   run->add_option("--stencil", stencil, "RBF-FD stencil rule: nearest, face-grown or ring");
+  run->add_option("--rbf-exponent", rbf_exponent, "PHS exponent s (odd, 1-9) of the RBF-FD Laplacian rows");
+  run->add_option("--rbf-degree", rbf_degree, "polynomial degree (0-4) of the RBF-FD Laplacian rows");
+  run->add_option("--gradient-degree", gradient_degree, "polynomial degree (0-4) of RBF-FD face gradients");
   run->add_flag("--full", full, "use the full suite's extent");
 
   std::string suite_name = "quick", out_dir = "reports/latest";
@@ -142,6 +145,9 @@ int main(int argc, char** argv) {
       if (!solver.empty()) options.solver = solver;
       if (!stencil.empty()) options.stencil = stencil;
       if (!perturb.empty()) options.perturb = perturb;
+      if (rbf_exponent >= 0) options.rbf_exponent = rbf_exponent;
+      if (rbf_degree >= 0) options.rbf_degree = rbf_degree;
+      if (gradient_degree >= 0) options.gradient_degree = gradient_degree;
       options.full = full;
       fmt::print("liquid-verify run {} levels={} max-jump={} solver={} tier={}\n", case_name,
                  levels.empty() ? "default" : levels, max_jump >= 0 ? std::to_string(max_jump) : "default",

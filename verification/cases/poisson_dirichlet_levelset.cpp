@@ -11,6 +11,7 @@
 // Tree. Base level L, level L + 2 in a narrow band around S (up to 2 levels between neighbours).
 // Expected: L-inf order >= 1.9 for p and >= 1.8 for dp/dn at faces between unknowns.
 
+#include <algorithm>
 #include <cmath>
 
 #include "common/poisson_study.hpp"
@@ -51,9 +52,15 @@ PoissonStudy<Dim> dirichlet_study(bool full) {
   };
   s.levelset = s.exact;
   const Box<Dim> domain = s.domain;
-  const auto phi = s.exact;
-  s.make_tree = [domain, phi](int level, const CellGraphOptions<Dim>& options) {
-    return tree::narrow_band<Dim>(domain, phi, level, level + 2, 2.0, options);
+  // p is not a distance: |grad p| is 4 at the apex of S and larger elsewhere, so a band of two
+  // cells in p would be half a cell or less in distance, leaving cells one level coarser touching S
+  // (the worst dp/dn sat at such faces). The band is measured in p / |grad p|, a distance to first
+  // order near S.
+  const auto p = s.exact;
+  const auto grad = s.gradient;
+  const auto distance = [p, grad](const Vec<Dim>& x) { return p(x) / std::max(grad(x).norm(), 1e-12); };
+  s.make_tree = [domain, distance](int level, const CellGraphOptions<Dim>& options) {
+    return tree::narrow_band<Dim>(domain, distance, level, level + 2, 2.0, options);
   };
   if (Dim == 2)
     s.level_min = 7, s.level_max = full ? 11 : 10;

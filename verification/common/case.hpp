@@ -20,6 +20,9 @@ struct CaseOptions {
   std::optional<std::string> solver;        ///< --solver NAME
   std::optional<std::string> stencil;       ///< --stencil RULE (nearest, face-grown, ring)
   std::optional<std::string> perturb;       ///< --perturb first-order: a deliberately degraded scheme
+  std::optional<int> rbf_exponent;          ///< --rbf-exponent S: PHS r^S of the RBF-FD Laplacian rows
+  std::optional<int> rbf_degree;            ///< --rbf-degree M: their polynomial degree
+  std::optional<int> gradient_degree;       ///< --gradient-degree M: degree of RBF-FD face gradients
   bool full = false;                        ///< the full suite's extent rather than the quick one
 };
 

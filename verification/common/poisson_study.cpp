@@ -11,6 +11,25 @@
 #include "liquid/tree/builders.hpp"
 
 namespace liquid::verification {
+namespace {
+
+template <int Dim>
+std::string format_point(const Vec<Dim>& x) {
+  std::string s = "(";
+  for (int k = 0; k < Dim; ++k) s += fmt::format("{}{:.4g}", k ? ", " : "", x[k]);
+  return s + ")";
+}
+
+template <int Dim>
+std::string describe_cell(const CellGraph<Dim>& graph, const PoissonStudy<Dim>& study, CellId c) {
+  if (c == no_cell) return {};
+  std::string s =
+      fmt::format("cell {} at {}, level {}", c, format_point<Dim>(graph.centre(c)), graph.level(c));
+  if (study.levelset) s += fmt::format(", phi {:.3g}", study.levelset(graph.centre(c)));
+  return s;
+}
+
+}  // namespace
 
 template <int Dim>
 PoissonRun solve_poisson(const CellGraph<Dim>& graph, const PoissonStudy<Dim>& study) {
@@ -43,18 +62,31 @@ PoissonRun solve_poisson(const CellGraph<Dim>& graph, const PoissonStudy<Dim>& s
     }
     shift /= volume;
   }
-  for (std::size_t i = 0; i < cells.size(); ++i)
-    run.err_p = std::max(run.err_p, std::abs(x[i] - shift - study.exact(graph.centre(cells[i]))));
+  CellId worst_cell = no_cell;
+  for (std::size_t i = 0; i < cells.size(); ++i) {
+    const double e = std::abs(x[i] - shift - study.exact(graph.centre(cells[i])));
+    if (e > run.err_p || worst_cell == no_cell) run.err_p = e, worst_cell = cells[i];
+  }
+  run.worst_p = describe_cell(graph, study, worst_cell);
 
   const std::vector<double> dpdn = mac::face_normal_derivative<Dim>(graph, system, study.discretisation, x);
+  FaceId worst_face = no_face;
   graph.for_each_face([&](FaceId f) {
     if (std::isnan(dpdn[f])) return;
     const double exact = study.gradient(graph.face_centre(f))[graph.face(f).axis];
-    run.err_grad = std::max(run.err_grad, std::abs(dpdn[f] - exact));
+    const double e = std::abs(dpdn[f] - exact);
+    if (e > run.err_grad || worst_face == no_face) run.err_grad = e, worst_face = f;
     const auto& g = graph.face(f);
     if (!g.is_boundary())
       run.max_level_jump = std::max(run.max_level_jump, std::abs(g.side_level[0] - g.side_level[1]));
   });
+  if (worst_face != no_face) {
+    const auto& g = graph.face(worst_face);
+    run.worst_grad =
+        fmt::format("face {} at {}, levels {}|{}, {}", worst_face,
+                    format_point<Dim>(graph.face_centre(worst_face)), g.side_level[0], g.side_level[1],
+                    !g.hanging() && g.side_level[0] == g.side_level[1] ? "two-point FD" : "RBF-FD");
+  }
   run.h = graph.cell_size(cells.front()).maxCoeff();
   graph.for_each_cell([&](CellId c) { run.h = std::min(run.h, graph.cell_size(c).maxCoeff()); });
   return run;
@@ -83,6 +115,18 @@ CaseResult run_poisson_study(PoissonStudy<Dim> study, const CaseOptions& options
   if (options.max_jump) study.max_jump = *options.max_jump;
   if (options.solver) study.solver.kind = linalg::parse_solver(*options.solver);
   if (options.stencil) study.discretisation.rule = mac::parse_stencil_rule(*options.stencil);
+  if (options.rbf_exponent) {
+    LIQUID_VERIFY(*options.rbf_exponent % 2 == 1 && *options.rbf_exponent <= 9,
+                  "--rbf-exponent must be odd and at most 9, got {}", *options.rbf_exponent);
+    study.discretisation.rbf.exponent = *options.rbf_exponent;
+  }
+  for (auto [given, target, flag] :
+       {std::tuple{options.rbf_degree, &study.discretisation.rbf.degree, "--rbf-degree"},
+        std::tuple{options.gradient_degree, &study.discretisation.gradient_degree, "--gradient-degree"}}) {
+    if (!given) continue;
+    LIQUID_VERIFY(*given >= 0 && *given <= 4, "{} must be in 0..4, got {}", flag, *given);
+    *target = *given;
+  }
   if (options.perturb) {
     // A deliberately inconsistent scheme for showing that the gate catches regressions: degree-1
     // polynomials cannot reproduce the Laplacian of quadratics at T-junctions.
@@ -121,6 +165,8 @@ CaseResult run_poisson_study(PoissonStudy<Dim> study, const CaseOptions& options
     adaptive.add_row({long(level), run.h, run.n_unknowns, run.assembly.n_rbf_rows, long(run.max_level_jump),
                       run.err_p, op, run.err_grad, og, run.assembly_seconds, run.solve_seconds,
                       long(run.solve.iterations)});
+    result.notes.push_back(
+        fmt::format("level {}: worst p at {}; worst dp/dn at {}", level, run.worst_p, run.worst_grad));
     result.expect(std::isfinite(run.err_p) && std::isfinite(run.err_grad),
                   fmt::format("level {}: NaN error", level));
 

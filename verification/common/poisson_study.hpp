@@ -48,6 +48,8 @@ struct PoissonRun {
   linalg::SolveStats solve;
   mac::AssemblyStats assembly;
   int max_level_jump = 0;
+  std::string worst_p;     ///< where the L-inf of p is reached: centre, level, distance to S in cells
+  std::string worst_grad;  ///< where the L-inf of dp/dn is reached: face centre, side levels, FD or RBF-FD
 };
 
 template <int Dim>

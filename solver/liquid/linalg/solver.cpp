@@ -90,6 +90,10 @@ class Iterative final : public LinearSolver {
     EigenSolver solver;
     solver.setTolerance(options_.tolerance);
     solver.setMaxIterations(options_.max_iterations);
+    if constexpr (requires { solver.preconditioner().setDroptol(1.0); }) {
+      solver.preconditioner().setDroptol(options_.ilut_droptol);
+      solver.preconditioner().setFillfactor(options_.ilut_fill);
+    }
     solver.compute(A);
     stats.setup_seconds = watch.seconds();
     if (solver.info() != Eigen::Success) {
@@ -161,6 +165,9 @@ class Direct final : public LinearSolver {
 std::unique_ptr<LinearSolver> make_solver(const SolveOptions& options) {
   LIQUID_VERIFY(options.tolerance > 0.0 && options.tolerance < 1.0,
                 "solver tolerance must be in (0, 1), got {}", options.tolerance);
+  LIQUID_VERIFY(options.ilut_droptol >= 0.0 && options.ilut_fill >= 1,
+                "ILUT needs droptol >= 0 and fill >= 1, got {} and {}", options.ilut_droptol,
+                options.ilut_fill);
   LIQUID_VERIFY(options.max_iterations > 0, "solver needs a positive iteration limit, got {}",
                 options.max_iterations);
   using Jacobi = Eigen::DiagonalPreconditioner<double>;
