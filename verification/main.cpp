@@ -71,7 +71,7 @@ int main(int argc, char** argv) {
 
   auto* list = app.add_subcommand("list", "list the verification cases");
 
-  std::string case_name, json_path, md_path, levels, solver, stencil;
+  std::string case_name, json_path, md_path, levels, solver, stencil, rows;
   int max_jump = -1, rbf_exponent = -1, rbf_degree = -1, gradient_degree = -1;
   bool full = false;
   auto* run = app.add_subcommand("run", "run one case and print its tables");
@@ -85,6 +85,10 @@ int main(int argc, char** argv) {
   run->add_option("--rbf-exponent", rbf_exponent, "PHS exponent s (odd, 1-9) of the RBF-FD Laplacian rows");
   run->add_option("--rbf-degree", rbf_degree, "polynomial degree (0-4) of the RBF-FD Laplacian rows");
   run->add_option("--gradient-degree", gradient_degree, "polynomial degree (0-4) of RBF-FD face gradients");
+  run->add_option("--rows", rows,
+                  "Poisson studies: rebuild each row's tree by its rule (default), or refine the first "
+                  "row's tree uniformly (the paper's recursive subdivision)")
+      ->check(CLI::IsMember({"rebuild", "refine"}));
   run->add_flag("--full", full, "use the full suite's extent");
 
   std::string suite_name = "quick", out_dir = "reports/latest";
@@ -144,14 +148,16 @@ int main(int argc, char** argv) {
       if (max_jump >= 0) options.max_jump = max_jump;
       if (!solver.empty()) options.solver = solver;
       if (!stencil.empty()) options.stencil = stencil;
+      if (!rows.empty()) options.rows = rows;
       if (!perturb.empty()) options.perturb = perturb;
       if (rbf_exponent >= 0) options.rbf_exponent = rbf_exponent;
       if (rbf_degree >= 0) options.rbf_degree = rbf_degree;
       if (gradient_degree >= 0) options.gradient_degree = gradient_degree;
       options.full = full;
-      fmt::print("liquid-verify run {} levels={} max-jump={} solver={} tier={}\n", case_name,
+      fmt::print("liquid-verify run {} levels={} max-jump={} solver={} rows={} tier={}\n", case_name,
                  levels.empty() ? "default" : levels, max_jump >= 0 ? std::to_string(max_jump) : "default",
-                 solver.empty() ? "default" : solver, full ? "full" : "quick");
+                 solver.empty() ? "default" : solver, rows.empty() ? "default" : rows,
+                 full ? "full" : "quick");
       return run_case(*info, options, json_path, md_path).passed ? 0 : 1;
     }
     if (*suite) {
@@ -191,6 +197,9 @@ int main(int argc, char** argv) {
       const bool is_full = gate_suite == "full";
       for (const auto& name : gate_cases)
         LIQUID_VERIFY(lv::find_case(name) != nullptr, "--case: no verification case named '{}'", name);
+      LIQUID_VERIFY(perturb.empty() || !gate_cases.empty(),
+                    "--perturb needs --case NAME: it degrades the Poisson studies' scheme, which not every "
+                    "case has");
       fmt::print("liquid-verify gate --suite {} --reference {}{}{}\n", gate_suite, reference_dir,
                  bless ? " --bless" : "", perturb.empty() ? "" : " --perturb " + perturb);
       int n_failed = 0, n_run = 0;

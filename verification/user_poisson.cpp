@@ -1,5 +1,8 @@
 #include "user_poisson.hpp"
 
+#include <algorithm>
+#include <cmath>
+#include <limits>
 #include <regex>
 #include <sstream>
 
@@ -102,8 +105,8 @@ CaseResult run(const UserPoissonArgs& args) {
                 "--levels {}: the finest level {} exceeds {} in {}D", args.levels,
                 s.level_max + s.finest_offset, morton::max_level<Dim>, Dim);
 
-  // How far below the measured errors is the numerical f? GSL's estimate at sample points.
-  double f_err = 0.0;
+  // How far below the measured errors are the numerical f and grad p? GSL's estimates at sample points.
+  double f_err = 0.0, g_err = 0.0;
   for (int i = 0; i < 64; ++i) {
     Vec<Dim> x;
     for (int k = 0; k < Dim; ++k)
@@ -111,15 +114,51 @@ CaseResult run(const UserPoissonArgs& args) {
     double e = 0.0;
     exact->laplacian(x, &e);
     f_err = std::max(f_err, e);
+    for (int k = 0; k < Dim; ++k) {
+      exact->derivative(x, k, &e);
+      g_err = std::max(g_err, e);
+    }
   }
 
   CaseOptions options;
-  CaseResult result = run_poisson_study<Dim>(s, options);
+  CaseResult result;
+  try {
+    result = run_poisson_study<Dim>(s, options);
+  } catch (const Error& e) {
+    const std::string what = e.what();
+    if (phi && what.find("leaves no unknowns") != std::string::npos)
+      throw Error(fmt::format("--levelset '{}': {}", args.levelset, what));
+    throw;
+  }
+  // The smallest errors measured must sit well above what the numerical derivatives could add:
+  // an error e in f moves p by about e L^2 (L the domain's size); grad p is compared directly.
+  const double size = domain.size().maxCoeff();
+  double min_p = std::numeric_limits<double>::infinity(), min_g = min_p;
+  for (const GateFigure& g : result.gate) {
+    if (g.kind != GateFigure::Kind::error) continue;
+    if (g.name.ends_with("err p")) min_p = std::min(min_p, g.value);
+    if (g.name.ends_with("err dp/dn")) min_g = std::min(min_g, g.value);
+  }
+  const double p_from_f = f_err * size * size;
+  const bool roundoff = min_p < exact_error_level && min_g < exact_error_level;
+  if (!roundoff) {
+    result.expect(p_from_f <= 0.1 * min_p,
+                  fmt::format("the numerical f (estimated error {:.1e}, about {:.1e} in p) is not 10 times "
+                              "below the smallest error of p measured ({:.1e}): the table may show the "
+                              "derivatives' error; use a smoother p or a coarser finest level",
+                              f_err, p_from_f, min_p));
+    result.expect(g_err <= 0.1 * min_g,
+                  fmt::format("the numerical grad p (estimated error {:.1e}) is not 10 times below the "
+                              "smallest error of dp/dn measured ({:.1e})",
+                              g_err, min_g));
+  }
   result.notes.push_back(
       fmt::format("grad p from GSL central differences and f = Lap p from Richardson-extrapolated second "
                   "differences of '{}'; largest estimated error of f at 64 sample points: "
-                  "{:.1e} (an error in f of e moves p by about e times the domain size squared)",
-                  args.exact, f_err));
+                  "{:.1e} (an error in f of e moves p by about e times the domain size squared: {:.1e}); "
+                  "of grad p: {:.1e}",
+                  args.exact, f_err, p_from_f, g_err));
+  result.fields.set("grad_error_estimate", g_err);
   result.fields.set("f_error_estimate", f_err);
   result.fields.set("command", describe(args));
   return result;

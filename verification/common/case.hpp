@@ -23,6 +23,7 @@ struct CaseOptions {
   std::optional<int> rbf_exponent;          ///< --rbf-exponent S: PHS r^S of the RBF-FD Laplacian rows
   std::optional<int> rbf_degree;            ///< --rbf-degree M: their polynomial degree
   std::optional<int> gradient_degree;       ///< --gradient-degree M: degree of RBF-FD face gradients
+  std::optional<std::string> rows;          ///< --rows rebuild|refine: how later rows' trees are made
   bool full = false;                        ///< the full suite's extent rather than the quick one
 };
 

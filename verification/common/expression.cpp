@@ -30,8 +30,12 @@ Expression<Dim>::Expression(std::string text, std::string what)
       inst->parser.SetExpr(text_);
       inst->parser.Eval();  // parses now, so errors surface here
     } catch (const mu::Parser::exception_type& e) {
-      throw Error(fmt::format("{}: {} at position {} of '{}' (variables: {})", what_, e.GetMsg(), e.GetPos(),
-                              text_, Dim == 2 ? "x, y" : "x, y, z"));
+      // muparser's message names the position itself for most errors; add it only where it does not.
+      std::string message = e.GetMsg();
+      if (message.find("position") == std::string::npos)
+        message += fmt::format(" at position {}", e.GetPos());
+      throw Error(fmt::format("{}: {} of '{}' (variables: {})", what_, message, text_,
+                              Dim == 2 ? "x, y" : "x, y, z"));
     }
     instances_.push_back(std::move(inst));
   }

@@ -14,6 +14,10 @@
 
 namespace liquid::verification {
 
+/// Errors below this are at the level of the solver's tolerance (1e-10) and of round-off: a study
+/// whose errors all sit below it reproduces p exactly and has no order to fit.
+inline constexpr double exact_error_level = 1e-9;
+
 template <int Dim>
 struct PoissonStudy {
   Box<Dim> domain;
@@ -24,6 +28,11 @@ struct PoissonStudy {
   bool dirichlet_walls = false;                       ///< walls carry p (else Neumann)
   /// The adaptive tree of one row, by its base level.
   std::function<CellGraph<Dim>(int level, const CellGraphOptions<Dim>& options)> make_tree;
+  /// false (--rows rebuild): make_tree per row, so band widths counted in finest cells halve with h.
+  /// true (--rows refine): only the first row calls make_tree; every later row is that tree with
+  /// each leaf split once more (the paper's recursive subdivision), so the refined regions and the
+  /// T-junctions stay where they are and each row is a true refinement of the one before.
+  bool self_similar = false;
   int level_min = 3, level_max = 5;  ///< base levels of the rows (CaseOptions::level_* override)
   int finest_offset = 2;             ///< finest level = base level + this
   int max_jump = 2;
@@ -38,6 +47,12 @@ struct PoissonStudy {
 /// study's levels, jump limit and solver.
 template <int Dim>
 CaseResult run_poisson_study(PoissonStudy<Dim> study, const CaseOptions& options);
+
+/// The tree of the row at base level `level`; `first` is make_tree(level_min) (used when the study
+/// is self-similar).
+template <int Dim>
+CellGraph<Dim> row_tree(const PoissonStudy<Dim>& study, const CellGraph<Dim>& first, int level,
+                        const CellGraphOptions<Dim>& options);
 
 /// One solve and its errors (also used by the unit tests and the hard cases).
 struct PoissonRun {

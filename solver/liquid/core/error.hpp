@@ -18,8 +18,19 @@ class Error : public std::runtime_error {
 };
 
 namespace detail {
+/// The source path from the repository's top folder on ("solver/liquid/mac/poisson.cpp"), not the
+/// build machine's absolute path.
+inline std::string source_path(const char* file) {
+  const std::string path(file);
+  for (const char* top : {"/solver/", "/verification/", "/benchmarks/"}) {
+    const auto at = path.rfind(top);
+    if (at != std::string::npos) return path.substr(at + 1);
+  }
+  return path;
+}
+
 [[noreturn]] inline void fail(const char* file, int line, const std::string& message) {
-  throw Error(fmt::format("{} ({}:{})", message, file, line));
+  throw Error(fmt::format("{} ({}:{})", message, source_path(file), line));
 }
 }  // namespace detail
 

@@ -1,5 +1,6 @@
 #include "liquid/tree/builders.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include "liquid/core/error.hpp"
@@ -111,6 +112,25 @@ void mark_narrow_band(const CellGraph<Dim>& graph, const LevelSet<Dim>& phi, int
 }
 
 template <int Dim>
+CellGraph<Dim> refined(const CellGraph<Dim>& base, int extra, CellGraphOptions<Dim> options) {
+  LIQUID_VERIFY(extra >= 0, "tree::refined: the number of extra levels must be non-negative (got {})", extra);
+  int finest = 0;
+  base.for_each_cell([&](CellId c) { finest = std::max(finest, base.level(c)); });
+  LIQUID_VERIFY(finest + extra <= morton::max_level<Dim>,
+                "tree::refined: level {} + {} exceeds the maximum {}", finest, extra, morton::max_level<Dim>);
+  options.max_jump = std::max(options.max_jump, base.options().max_jump);
+  options.max_level = std::max(options.max_level, finest + extra);
+  // A node larger than the base leaves it covers is split; a node inside a base leaf is split until
+  // it is `extra` levels finer than that leaf. The node's centre finds the leaf (O(log n)).
+  return CellGraph<Dim>::build(
+      base.domain(),
+      [&base, extra](const TreeNode<Dim>& n) {
+        return n.level < base.level(base.locate(n.box.centre())) + extra;
+      },
+      options);
+}
+
+template <int Dim>
 CellGraph<Dim> random(const Box<Dim>& domain, std::uint64_t seed, int min_level, int max_level,
                       double split_probability, CellGraphOptions<Dim> options) {
   check_levels<Dim>(min_level, max_level, "random");
@@ -138,6 +158,7 @@ CellGraph<Dim> random(const Box<Dim>& domain, std::uint64_t seed, int min_level,
                                        const CellGraphOptions<D>&);                                       \
   template void mark_narrow_band<D>(const CellGraph<D>&, const LevelSet<D>&, int, int, double,            \
                                     std::vector<Mark>&, const std::vector<CellId>*);                      \
+  template CellGraph<D> refined<D>(const CellGraph<D>&, int, CellGraphOptions<D>);                        \
   template CellGraph<D> random<D>(const Box<D>&, std::uint64_t, int, int, double, CellGraphOptions<D>);
 LIQUID_TREE_BUILDERS(2)
 LIQUID_TREE_BUILDERS(3)

@@ -47,6 +47,14 @@ template <int Dim>
 void mark_narrow_band(const CellGraph<Dim>& graph, const LevelSet<Dim>& phi, int coarse_level, int fine_level,
                       double band, std::vector<Mark>& marks, const std::vector<CellId>* candidates = nullptr);
 
+/// `base` with every leaf split `extra` times: the tree of the next rows of a convergence study in
+/// which "every level shifts by one per row" (the paper's recursive subdivision). Level jumps are
+/// those of `base`; the refined region stays the same region of space, so every T-junction of row
+/// k sits where it sat in row 0 and local truncation errors scale with h. options.max_jump must be
+/// at least base's largest jump (it is raised to it when lower).
+template <int Dim>
+CellGraph<Dim> refined(const CellGraph<Dim>& base, int extra, CellGraphOptions<Dim> options = {});
+
 /// A seeded random, generally non-graded tree: every node between min_level and max_level is split
 /// with probability `split_probability` (a hash of seed and node, so the tree does not depend on
 /// the thread count), then the level jump options.max_jump is enforced.

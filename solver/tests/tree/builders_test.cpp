@@ -3,8 +3,11 @@
 // by mark + adapt reaching the tree a fresh build gives.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cstdlib>
 #include <set>
 
+#include "liquid/core/error.hpp"
 #include "liquid/tree/builders.hpp"
 
 namespace liquid {
@@ -123,6 +126,36 @@ TYPED_TEST(BuildersTest, NarrowBandUnderEachJump) {
       EXPECT_LE(coarsest, fine - 2);
     }
   }
+}
+
+// refined(base, k) splits every leaf of base k times: 2^(Dim k) children per leaf, each inside its
+// parent leaf and k levels finer, the same largest jump, and every invariant.
+TYPED_TEST(BuildersTest, RefinedSplitsEveryLeafUniformly) {
+  constexpr int Dim = TypeParam::value;
+  CellGraphOptions<Dim> options;
+  options.max_jump = 2;
+  const auto base = tree::narrow_band<Dim>(Box<Dim>{}, sphere<Dim>(Vec<Dim>::Constant(0.5), 0.3), 2,
+                                           Dim == 2 ? 5 : 4, 1.5, options);
+  for (int k : {0, 1, 2}) {
+    const auto fine = tree::refined<Dim>(base, k, options);
+    ASSERT_TRUE(fine.check_invariants().ok()) << "k = " << k;
+    EXPECT_EQ(fine.n_cells(), base.n_cells() << (Dim * k)) << "k = " << k;
+    int jump_base = 0, jump_fine = 0;
+    base.for_each_face([&](FaceId f) {
+      const auto& g = base.face(f);
+      if (!g.is_boundary()) jump_base = std::max(jump_base, std::abs(g.side_level[0] - g.side_level[1]));
+    });
+    fine.for_each_face([&](FaceId f) {
+      const auto& g = fine.face(f);
+      if (!g.is_boundary()) jump_fine = std::max(jump_fine, std::abs(g.side_level[0] - g.side_level[1]));
+    });
+    EXPECT_EQ(jump_fine, jump_base);
+    fine.for_each_cell([&](CellId c) {
+      const CellId parent = base.locate(fine.centre(c));
+      ASSERT_EQ(fine.level(c), base.level(parent) + k) << "cell " << c;
+    });
+  }
+  EXPECT_THROW(tree::refined<Dim>(base, -1), Error);
 }
 
 TYPED_TEST(BuildersTest, RandomTreesAreSeededAndRespectTheJump) {
