@@ -8,8 +8,8 @@
 // points as RBF-FD nodes elsewhere). With u = y - x^2 + 1 (2D) or u = z - x^2 - y^2 + 1 (3D):
 //   2D: f = 48 x^2 u^2 - 8 u^3 + 12 u^2 + 4,
 //   3D: f = 48 (x^2 + y^2) u^2 - 16 u^3 + 12 u^2 + 6.
-// Tree. Base level L, level L + 2 in a narrow band around S (up to 2 levels between neighbours);
-// each later row splits every cell of the first row's tree once more.
+// Tree. Base level L, level L + 2 in a narrow band around S (up to 2 levels between neighbours),
+// rebuilt per row; --rows refine splits every cell of the first row's tree once more per row.
 // Expected: L-inf order >= 1.9 for p and >= 1.8 for dp/dn at faces between unknowns.
 
 #include <algorithm>

@@ -6,8 +6,9 @@
 // value, as the paper does.
 // Tree. Non-graded: base level L everywhere and level L + 2 in a narrow band around a circle
 // (sphere) of radius 0.9 centred in the domain, as coarse as the level-jump limit (2 by default)
-// allows in between, so level jumps of 2 meet at T-junctions. Each row is the first row's tree with
-// every cell split once more (every level shifts by one, the band stays where it is).
+// allows in between, so level jumps of 2 meet at T-junctions. Each row shifts every level by one
+// and rebuilds the band (its width counted in finest cells); --rows refine instead splits every
+// cell of the first row's tree once more per row, so the band stays where it is.
 // Expected: L-inf order >= 1.9 for p and >= 1.8 for dp/dn at faces (the paper shows about 2).
 
 #include <cmath>
