@@ -120,16 +120,21 @@ CaseResult run(const UserPoissonArgs& args) {
     }
   }
 
-  CaseOptions options;
-  CaseResult result;
-  try {
-    result = run_poisson_study<Dim>(s, options);
-  } catch (const Error& e) {
-    const std::string what = e.what();
-    if (phi && what.find("leaves no unknowns") != std::string::npos)
-      throw Error(fmt::format("--levelset '{}': {}", args.levelset, what));
-    throw;
+  if (phi) {
+    // Later rows only refine the region, so a level set negative at no centre of the first row's
+    // tree leaves no unknowns: say so by the argument's name before any solve.
+    CellGraphOptions<Dim> o;
+    o.max_jump = s.max_jump;
+    const CellGraph<Dim> first = s.make_tree(s.level_min, o);
+    bool inside = false;
+    first.for_each_cell([&](CellId c) { inside = inside || (*phi)(first.centre(c)) < 0.0; });
+    LIQUID_VERIFY(
+        inside, "--levelset '{}' is negative at no cell centre of the level {} tree ({} cells): no unknowns",
+        args.levelset, s.level_min, first.n_cells());
   }
+
+  CaseOptions options;
+  CaseResult result = run_poisson_study<Dim>(s, options);
   // The smallest errors measured must sit well above what the numerical derivatives could add:
   // an error e in f moves p by about e L^2 (L the domain's size); grad p is compared directly.
   const double size = domain.size().maxCoeff();

@@ -114,8 +114,7 @@ void mark_narrow_band(const CellGraph<Dim>& graph, const LevelSet<Dim>& phi, int
 template <int Dim>
 CellGraph<Dim> refined(const CellGraph<Dim>& base, int extra, CellGraphOptions<Dim> options) {
   LIQUID_VERIFY(extra >= 0, "tree::refined: the number of extra levels must be non-negative (got {})", extra);
-  int finest = 0;
-  base.for_each_cell([&](CellId c) { finest = std::max(finest, base.level(c)); });
+  const int finest = base.deepest_level();
   LIQUID_VERIFY(finest + extra <= morton::max_level<Dim>,
                 "tree::refined: level {} + {} exceeds the maximum {}", finest, extra, morton::max_level<Dim>);
   options.max_jump = std::max(options.max_jump, base.options().max_jump);
