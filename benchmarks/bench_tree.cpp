@@ -1,12 +1,12 @@
 // CellGraph speed: building octrees of up to a few million leaves, split/merge throughput, point
 // location, k-ring queries, and a narrow-band re-adaptation after the level set moves by one fine
-// cell, shown next to a full rebuild of the same tree.
+// cell, with every cell marked or only the tracked band, shown next to a full rebuild.
 //
 //   liquid-bench --benchmark_filter=Tree
 //
-// Counters: leaves, faces, rates per second, and for the re-adaptation the cells changed per step,
-// the rebuild time of the same tree (full_build_s) and the time per changed cell against the
-// rebuild's time per leaf.
+// Counters: leaves, faces, rates per second, and for the re-adaptation the cells visited and
+// changed per step, the rebuild time of the same tree (full_build_s) and the time of a step per
+// changed cell against the rebuild's time per leaf.
 #include <benchmark/benchmark.h>
 #include <omp.h>
 
@@ -15,6 +15,7 @@
 #include <random>
 
 #include "liquid/core/timer.hpp"
+#include "liquid/tree/band_tracker.hpp"
 #include "liquid/tree/builders.hpp"
 
 namespace liquid {
@@ -66,23 +67,42 @@ void BM_TreeBuild(benchmark::State& state) {
 }
 BENCHMARK(BM_TreeBuild)->DenseRange(0, 4)->Unit(benchmark::kMillisecond)->UseRealTime();
 
+/// Random splits and merges of single cells on a seeded random non-graded octree (levels 2-7,
+/// ~100k leaves) under each level-jump limit: splitting a fine cell next to coarse ones forces
+/// balancing splits, which are counted (balance_per_split) and included in the rates.
 void BM_TreeSplitMerge(benchmark::State& state) {
   CellGraphOptions<3> options;
   options.max_jump = static_cast<int>(state.range(0));
-  CellGraph<3> g = tree::uniform<3>(Box<3>{}, 5, options);
+  CellGraph<3> g = tree::random<3>(Box<3>{}, 7, 2, 7, 0.35, options);
   std::mt19937_64 rng(1);
-  long ops = 0;
-  for (auto _ : state) {
-    // Split a random leaf and merge its children back: two local changes.
+  long splits = 0, balance = 0, merges = 0, tries = 0;
+  const int max_level = 8;
+  const auto pick = [&] {
     CellId c;
     do {
       c = static_cast<CellId>(rng() % g.cell_capacity());
-    } while (!g.alive(c) || g.level(c) != 5);
-    const auto children = g.split(c);
-    g.merge(children);
-    ops += 2;
+    } while (!g.alive(c));
+    return c;
+  };
+  AdaptReport report;
+  for (auto _ : state) {
+    ++tries;
+    const CellId c = pick();
+    if (rng() % 2 == 0) {
+      if (g.level(c) >= max_level) continue;
+      g.split(c, &report);
+      splits += report.n_split;
+      balance += report.n_balance_splits;
+    } else if (g.can_merge(c)) {
+      g.merge(*g.siblings(c));
+      ++merges;
+    }
   }
-  state.counters["ops_per_s"] = benchmark::Counter(static_cast<double>(ops), benchmark::Counter::kIsRate);
+  state.counters["ops_per_s"] =
+      benchmark::Counter(static_cast<double>(splits + merges), benchmark::Counter::kIsRate);
+  state.counters["splits"] = static_cast<double>(splits);
+  state.counters["merges"] = static_cast<double>(merges);
+  state.counters["balance_per_split"] = static_cast<double>(balance) / std::max(1L, splits - balance);
   state.counters["leaves"] = g.n_cells();
 }
 BENCHMARK(BM_TreeSplitMerge)->Arg(1)->Arg(2)->Arg(unlimited_jump)->UseRealTime();
@@ -137,16 +157,18 @@ void BM_TreeKRing(benchmark::State& state) {
 BENCHMARK(BM_TreeKRing)->Arg(1)->Arg(2)->Arg(3)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 /// Narrow band to level 9 around a sphere that moves by one fine cell per step (back and forth),
-/// re-adapted by mark + adapt. First arg, the marking: 0 every cell; 1 only the previous band's
-/// cells and their 1-ring (the paper's surface-cell list, kept up to date from the reports).
+/// re-adapted by mark + adapt. First arg, the marking: 0 every cell (dense marks, dense adapt);
+/// 1 the NarrowBandTracker (refined cells and the coarse cells next to them, sparse marks).
 /// Second arg, the scene: 0 a sphere of radius 0.3 over a level-1 background (the band is most of
-/// the tree); 1 a sphere of radius 0.1 in a uniform level-6 background (most cells far from it).
+/// the tree); 1 a sphere of radius 0.1 in a uniform level-6 background; 2 the same sphere in a
+/// level-7 background (4x the leaves, the same band). Scenes 1 and 2 side by side show whether a
+/// step costs what changes or what exists.
 void BM_TreeReadapt(benchmark::State& state) {
-  const bool band_only = state.range(0) != 0;
-  const bool small = state.range(1) != 0;
+  const bool tracked = state.range(0) != 0;
+  const int scene = static_cast<int>(state.range(1));
   const int fine = 9;
-  const int coarse = small ? 6 : 1;
-  const double radius = small ? 0.1 : 0.3;
+  const int coarse = scene == 0 ? 1 : scene == 1 ? 6 : 7;
+  const double radius = scene == 0 ? 0.3 : 0.1;
   const double h = std::ldexp(1.0, -fine);
   const double band = 1.0;
   Vec<3> centre = Vec<3>::Constant(0.5);
@@ -154,68 +176,59 @@ void BM_TreeReadapt(benchmark::State& state) {
   Stopwatch watch;
   const CellGraph<3> rebuilt = tree::narrow_band<3>(Box<3>{}, sphere(centre, radius), coarse, fine, band);
   const double full_build = watch.seconds();
+  tree::NarrowBandTracker<3> tracker(g, coarse, fine, band);
   std::vector<Mark> marks;
-  std::vector<CellId> candidates, ring, band_list;
-  std::vector<std::uint32_t> stamp;
-  std::vector<std::uint8_t> in_band;
-  // The band list (cells at the two finest levels), kept up to date from the change reports.
-  const auto band_add = [&](CellId c) {
-    if (g.level(c) < fine - 1) return;
-    if (in_band.size() <= static_cast<std::size_t>(c)) in_band.resize(g.cell_capacity(), 0);
-    in_band[c] = 1;
-    band_list.push_back(c);
-  };
-  g.for_each_cell(band_add);
-  long changed = 0, steps = 0;
+  MarkList list;
+  // Warm-up, untimed: the tracker's first call (which visits every cell), then one step out and
+  // back, after which the id arrays have grown to their working size (their growth is amortised;
+  // a step that reallocates them copies the whole tree once).
+  for (int k = 0; k < 3; ++k) {
+    if (k == 1) centre[0] += h;
+    if (k == 2) centre[0] -= h;
+    const auto phi = sphere(centre, radius);
+    if (tracked) {
+      tracker.mark(g, phi, list);
+      tracker.update(g, g.adapt(list));
+    } else {
+      tree::mark_narrow_band<3>(g, phi, coarse, fine, band, marks);
+      g.adapt(marks);
+    }
+  }
+  long changed = 0, steps = 0, visited = 0;
   double mark_seconds = 0.0, adapt_seconds = 0.0;
   int direction = 1;
-  std::uint32_t round = 0;
   for (auto _ : state) {
     centre[0] += direction * h;
     direction = -direction;
     const auto phi = sphere(centre, radius);
     watch.restart();
-    if (band_only) {
-      ++round;
-      candidates.clear();
-      if (stamp.size() < static_cast<std::size_t>(g.cell_capacity())) stamp.resize(g.cell_capacity(), 0);
-      std::size_t kept = 0;
-      for (CellId c : band_list) {
-        if (!g.alive(c) || !in_band[c]) continue;
-        band_list[kept++] = c;
-        g.k_ring(c, 1, ring);
-        for (CellId x : ring)
-          if (stamp[x] != round) {
-            stamp[x] = round;
-            candidates.push_back(x);
-          }
-      }
-      band_list.resize(kept);
-      tree::mark_narrow_band<3>(g, phi, coarse, fine, band, marks, &candidates);
+    if (tracked) {
+      tracker.mark(g, phi, list);
+      visited += static_cast<long>(tracker.candidates().size());
     } else {
       tree::mark_narrow_band<3>(g, phi, coarse, fine, band, marks);
+      visited += g.n_cells();
     }
     mark_seconds += watch.seconds();
     watch.restart();
-    const AdaptReport report = g.adapt(marks);
+    const AdaptReport report = tracked ? g.adapt(list) : g.adapt(marks);
+    if (tracked) tracker.update(g, report);
     adapt_seconds += watch.seconds();
-    for (CellId c : report.removed_cells)
-      if (static_cast<std::size_t>(c) < in_band.size()) in_band[c] = 0;
-    for (CellId c : report.new_cells) band_add(c);
     changed += static_cast<long>(report.new_cells.size() + report.removed_cells.size());
     ++steps;
   }
   state.counters["leaves"] = g.n_cells();
+  state.counters["visited_per_step"] = static_cast<double>(visited) / steps;
   state.counters["changed_cells_per_step"] = static_cast<double>(changed) / steps;
   state.counters["full_build_s"] = full_build;
   state.counters["mark_s"] = mark_seconds / steps;
   state.counters["adapt_s"] = adapt_seconds / steps;
-  state.counters["adapt_ns_per_changed_cell"] = 1e9 * adapt_seconds / std::max(1L, changed);
+  state.counters["step_ns_per_changed_cell"] = 1e9 * (mark_seconds + adapt_seconds) / std::max(1L, changed);
   state.counters["build_ns_per_leaf"] = 1e9 * full_build / rebuilt.n_cells();
-  state.counters["candidates"] = band_only ? static_cast<double>(candidates.size()) : g.n_cells();
+  state.counters["threads"] = omp_get_max_threads();
 }
 BENCHMARK(BM_TreeReadapt)
-    ->ArgsProduct({{0, 1}, {0, 1}})
+    ->ArgsProduct({{0, 1}, {0, 1, 2}})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime()
     ->Iterations(6);

@@ -16,6 +16,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
 #include <regex>
 
@@ -71,7 +72,7 @@ int main(int argc, char** argv) {
 
   auto* list = app.add_subcommand("list", "list the verification cases");
 
-  std::string case_name, json_path, md_path, levels, solver, stencil, rows;
+  std::string case_name, json_path, md_path, levels, solver, stencil, rows, trees_dir;
   int max_jump = -1, rbf_exponent = -1, rbf_degree = -1, gradient_degree = -1;
   bool full = false;
   auto* run = app.add_subcommand("run", "run one case and print its tables");
@@ -89,6 +90,8 @@ int main(int argc, char** argv) {
                   "Poisson studies: rebuild each row's tree by its rule (default), or refine the first "
                   "row's tree uniformly (the paper's recursive subdivision)")
       ->check(CLI::IsMember({"rebuild", "refine"}));
+  run->add_option("--trees", trees_dir,
+                  "write the trees the case checks to DIR as HDF5 + XDMF (ParaView); cellgraph-invariants");
   run->add_flag("--full", full, "use the full suite's extent");
 
   std::string suite_name = "quick", out_dir = "reports/latest";
@@ -153,6 +156,12 @@ int main(int argc, char** argv) {
       if (rbf_exponent >= 0) options.rbf_exponent = rbf_exponent;
       if (rbf_degree >= 0) options.rbf_degree = rbf_degree;
       if (gradient_degree >= 0) options.gradient_degree = gradient_degree;
+      if (!trees_dir.empty()) {
+        LIQUID_VERIFY(info->writes_trees, "--trees: case '{}' writes no trees (cellgraph-invariants does)",
+                      case_name);
+        LIQUID_VERIFY(std::filesystem::is_directory(trees_dir), "--trees: '{}' is not a folder", trees_dir);
+        options.trees_dir = trees_dir;
+      }
       options.full = full;
       fmt::print("liquid-verify run {} levels={} max-jump={} solver={} rows={} tier={}\n", case_name,
                  levels.empty() ? "default" : levels, max_jump >= 0 ? std::to_string(max_jump) : "default",

@@ -15,7 +15,9 @@
 //
 // Options: --max-jump K (only that limit; 0 or >= 64 means unlimited), --levels A:B (levels of the
 // random tree; default 2:7 in 2D, 2:5 in 3D: the 3D range ends two levels lower), --full (more
-// adapt steps).
+// adapt steps), --trees DIR (write each built tree as DIR/cellgraph-<D>d-jump<K>.h5 + .xmf, with
+// the cell field "hanging_faces": how many faces cover only part of one of the cell's sides;
+// ParaView opens the .xmf).
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -23,6 +25,7 @@
 
 #include "common/case.hpp"
 #include "liquid/core/error.hpp"
+#include "liquid/io/tree_output.hpp"
 #include "liquid/tree/builders.hpp"
 
 namespace liquid::verification {
@@ -58,8 +61,23 @@ void check(const CellGraph<Dim>& g, Row& row, const std::string& when) {
   if (row.first_failure.empty()) row.first_failure = when + ": " + r.text(3);
 }
 
+/// Writes the tree with, per cell, the number of faces that cover only part of one of its sides
+/// (its T-junctions); returns the .xmf path.
 template <int Dim>
-Row run_one(int jump, int first_level, int last_level, int n_steps, std::uint64_t seed) {
+std::string write(const CellGraph<Dim>& g, const std::string& dir, const std::string& jump_name) {
+  std::vector<double> hanging(static_cast<std::size_t>(g.cell_capacity()), 0.0);
+  g.for_each_face([&](FaceId f) {
+    const GraphFace& face = g.face(f);
+    for (int s = 0; s < 2; ++s)
+      if (face.cell[s] != no_cell && face.hanging(s)) hanging[face.cell[s]] += 1.0;
+  });
+  const io::CellField fields[] = {{"hanging_faces", hanging}};
+  return io::write_tree<Dim>(fmt::format("{}/cellgraph-{}d-jump{}", dir, Dim, jump_name), g, fields).xmf;
+}
+
+template <int Dim>
+Row run_one(int jump, int first_level, int last_level, int n_steps, std::uint64_t seed,
+            const std::optional<std::string>& trees_dir, std::vector<std::string>& written) {
   CellGraphOptions<Dim> options;
   options.max_jump = jump;
   options.max_level = last_level + 1;
@@ -69,6 +87,8 @@ Row run_one(int jump, int first_level, int last_level, int n_steps, std::uint64_
   Row row;
   check(g, row, "after the build");
   measure(g, row);
+  if (trees_dir)
+    written.push_back(write(g, *trees_dir, jump == unlimited_jump ? "unlimited" : std::to_string(jump)));
   const Row built = row;
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> u(0.0, 1.0);
@@ -109,6 +129,7 @@ CaseResult run(const CaseOptions& options) {
   LIQUID_VERIFY(first >= 0 && last >= first + 1 && last <= 20,
                 "cellgraph-invariants: --levels {}:{} needs 0 <= A < B <= 20", first, last);
   const int n_steps = options.full ? 100 : 25;
+  std::vector<std::string> written;
 
   Table table("Random trees after build and adapt steps: sizes of the built tree, worst jump over the run",
               {"dim", "max jump", "leaves", "faces", "hanging faces", "boundary faces", "worst jump",
@@ -116,9 +137,9 @@ CaseResult run(const CaseOptions& options) {
   for (int dim : {2, 3}) {
     for (int jump : jumps) {
       const std::uint64_t seed = 1000 * dim + static_cast<std::uint64_t>(std::min(jump, 99));
-      const Row row =
-          dim == 2 ? run_one<2>(jump, first, last, n_steps, seed)
-                   : run_one<3>(jump, std::max(0, first), std::max(first + 1, last - 2), n_steps, seed);
+      const Row row = dim == 2 ? run_one<2>(jump, first, last, n_steps, seed, options.trees_dir, written)
+                               : run_one<3>(jump, std::max(0, first), std::max(first + 1, last - 2), n_steps,
+                                            seed, options.trees_dir, written);
       const std::string jump_name = jump == unlimited_jump ? "unlimited" : std::to_string(jump);
       table.add_row({long{dim}, jump_name, long{row.n_leaves}, long{row.n_faces}, long{row.n_hanging},
                      long{row.n_boundary}, long{row.worst_jump}, long{row.n_steps}, row.n_split, row.n_merged,
@@ -137,12 +158,13 @@ CaseResult run(const CaseOptions& options) {
   result.tables.push_back(std::move(table));
   result.notes.push_back(
       "hanging faces: faces smaller than the cell side on one of their sides (T-junctions)");
+  for (const auto& path : written) result.notes.push_back("tree written: " + path);
   return result;
 }
 
 LIQUID_VERIFICATION_CASE(
     {"cellgraph-invariants",
-     "Cellgraph invariants on random non-graded trees, 2D and 3D, every level-jump limit", true, run});
+     "Cellgraph invariants on random non-graded trees, 2D and 3D, every level-jump limit", true, run, true});
 
 }  // namespace
 }  // namespace liquid::verification

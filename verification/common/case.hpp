@@ -24,6 +24,7 @@ struct CaseOptions {
   std::optional<int> rbf_degree;            ///< --rbf-degree M: their polynomial degree
   std::optional<int> gradient_degree;       ///< --gradient-degree M: degree of RBF-FD face gradients
   std::optional<std::string> rows;          ///< --rows rebuild|refine: how later rows' trees are made
+  std::optional<std::string> trees_dir;     ///< --trees DIR: write the trees checked (HDF5 + XDMF)
   bool full = false;                        ///< the full suite's extent rather than the quick one
 };
 
@@ -57,6 +58,7 @@ struct CaseInfo {
   std::string summary;  ///< one line for `liquid-verify list`
   bool quick = true;    ///< part of the quick suite (CI) as well as the full one
   std::function<CaseResult(const CaseOptions&)> run;
+  bool writes_trees = false;  ///< honours CaseOptions::trees_dir
 };
 
 /// All registered cases, in name order.

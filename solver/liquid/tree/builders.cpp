@@ -83,14 +83,14 @@ CellGraph<Dim> narrow_band(const Box<Dim>& domain, const LevelSet<Dim>& phi, int
 
 template <int Dim>
 void mark_narrow_band(const CellGraph<Dim>& graph, const LevelSet<Dim>& phi, int coarse_level, int fine_level,
-                      double band, std::vector<Mark>& marks, const std::vector<CellId>* candidates) {
+                      double band, std::vector<Mark>& marks) {
   check_levels<Dim>(coarse_level, fine_level, "mark_narrow_band");
   const double h = finest_size(graph.domain(), fine_level);
   marks.assign(static_cast<std::size_t>(graph.cell_capacity()), Mark::keep);
-  const long n = candidates != nullptr ? static_cast<long>(candidates->size()) : graph.cell_capacity();
+  const long n = graph.cell_capacity();
 #pragma omp parallel for schedule(static) if (n > detail::parallel_min)
   for (long i = 0; i < n; ++i) {
-    const CellId c = candidates != nullptr ? (*candidates)[i] : static_cast<CellId>(i);
+    const auto c = static_cast<CellId>(i);
     if (!graph.alive(c)) continue;
     TreeNode<Dim> node{graph.level(c), graph.address(c), graph.box(c)};
     if (narrow_band_refines(node, phi, coarse_level, fine_level, band, h)) {
@@ -156,7 +156,7 @@ CellGraph<Dim> random(const Box<Dim>& domain, std::uint64_t seed, int min_level,
   template CellGraph<D> narrow_band<D>(const Box<D>&, const LevelSet<D>&, int, int, double,               \
                                        const CellGraphOptions<D>&);                                       \
   template void mark_narrow_band<D>(const CellGraph<D>&, const LevelSet<D>&, int, int, double,            \
-                                    std::vector<Mark>&, const std::vector<CellId>*);                      \
+                                    std::vector<Mark>&);                                                  \
   template CellGraph<D> refined<D>(const CellGraph<D>&, int, CellGraphOptions<D>);                        \
   template CellGraph<D> random<D>(const Box<D>&, std::uint64_t, int, int, double, CellGraphOptions<D>);
 LIQUID_TREE_BUILDERS(2)

@@ -40,12 +40,12 @@ bool narrow_band_refines(const TreeNode<Dim>& node, const LevelSet<Dim>& phi, in
                          int fine_level, double band, double fine_size);
 
 /// Marks an existing graph towards narrow_band(phi, coarse_level, fine_level, band): split where
-/// the rule refines a leaf, merge where it would not refine the leaf's parent. Only the cells in
-/// `candidates` are visited when it is non-null (e.g. the previous band and its k-ring), else all
-/// cells. `marks` (out) is resized to graph.cell_capacity() and reset first. Uses OpenMP.
+/// the rule refines a leaf, merge where it would not refine the leaf's parent. Visits every cell;
+/// `marks` (out) is resized to graph.cell_capacity() and reset first. Uses OpenMP. To re-adapt at
+/// a cost proportional to the band instead, see NarrowBandTracker (band_tracker.hpp).
 template <int Dim>
 void mark_narrow_band(const CellGraph<Dim>& graph, const LevelSet<Dim>& phi, int coarse_level, int fine_level,
-                      double band, std::vector<Mark>& marks, const std::vector<CellId>* candidates = nullptr);
+                      double band, std::vector<Mark>& marks);
 
 /// `base` with every leaf split `extra` times: the tree of the next rows of a convergence study in
 /// which "every level shifts by one per row" (the paper's recursive subdivision). Level jumps are

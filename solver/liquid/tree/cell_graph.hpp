@@ -96,6 +96,19 @@ struct SideFace {
 /// What adapt() is asked to do with a cell.
 enum class Mark : std::int8_t { keep = 0, split = 1, merge = 2 };
 
+/// Sparse marks for adapt(): the cells to split and the cells to merge. A sibling group merges only
+/// when every member is listed. Duplicates and dead ids are ignored; order does not matter (adapt
+/// sorts both lists, so the outcome equals that of the same marks given densely).
+struct MarkList {
+  std::vector<CellId> split;
+  std::vector<CellId> merge;
+  void clear() {
+    split.clear();
+    merge.clear();
+  }
+  bool empty() const { return split.empty() && merge.empty(); }
+};
+
 /// Sparse linear combinations: entry i is sum_k weight[k] * old[source[k]], k in [begin[i], begin[i+1]).
 struct Origins {
   std::vector<std::int32_t> begin{0};
@@ -238,6 +251,9 @@ class CellGraph {
   /// every split (at most one level per marked cell, plus the balancing splits), then every
   /// sibling group whose members are all marked merge, where min_level and the jump limit allow.
   AdaptReport adapt(std::span<const Mark> marks);
+  /// adapt() from sparse marks: costs O(marked cells + changed cells), not O(cells), so a narrow
+  /// band can be re-adapted at a cost proportional to what changes. The lists are sorted in place.
+  AdaptReport adapt(MarkList& marks);
 
   // ---- checks
   /// Checks every structural invariant (see the .cpp); O(cells + faces) hash probes.
@@ -304,6 +320,8 @@ class CellGraph {
   std::vector<std::int32_t> face_log_index_;   // face id -> index in born_faces_
   std::vector<FaceId> log_source_;
   std::vector<double> log_weight_;
+  std::vector<std::uint32_t> merge_stamp_;  // adapt(): == merge_round_ when the cell is marked merge
+  std::uint32_t merge_round_ = 0;
 };
 
 template <int Dim>

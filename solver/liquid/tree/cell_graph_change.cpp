@@ -313,18 +313,44 @@ template <int Dim>
 AdaptReport CellGraph<Dim>::adapt(std::span<const Mark> marks) {
   LIQUID_VERIFY(marks.size() >= cells_.size(), "CellGraph::adapt: {} marks for {} cell ids (cell_capacity())",
                 marks.size(), cells_.size());
-  AdaptReport r;
-  std::vector<CellId> to_split, to_merge;
+  MarkList list;
   for (CellId c = 0; c < cell_capacity(); ++c) {
     if (!cells_[c].alive) continue;
     if (marks[c] == Mark::split)
-      to_split.push_back(c);
+      list.split.push_back(c);
     else if (marks[c] == Mark::merge)
-      to_merge.push_back(c);
+      list.merge.push_back(c);
   }
+  return adapt(list);
+}
+
+template <int Dim>
+AdaptReport CellGraph<Dim>::adapt(MarkList& marks) {
+  for (auto* list : {&marks.split, &marks.merge}) {
+    std::sort(list->begin(), list->end());
+    list->erase(std::unique(list->begin(), list->end()), list->end());
+  }
+  // Stamp the merge marks of cells alive now; ids born during this change are never stamped (the
+  // free list only hands out ids dead before it, and ids removed by it are not reused within it).
+  if (++merge_round_ == 0) {
+    std::fill(merge_stamp_.begin(), merge_stamp_.end(), 0u);
+    merge_round_ = 1;
+  }
+  if (merge_stamp_.size() < cells_.size()) merge_stamp_.resize(cells_.size(), 0u);
+  long n_merge_marked = 0;
+  for (CellId c : marks.merge)
+    if (alive(c)) {
+      merge_stamp_[c] = merge_round_;
+      ++n_merge_marked;
+    }
+  const auto marked_merge = [&](CellId s) {
+    return static_cast<std::size_t>(s) < merge_stamp_.size() && merge_stamp_[s] == merge_round_;
+  };
+
+  AdaptReport r;
   begin_change();
-  for (CellId c : to_split) {
-    if (!cells_[c].alive) continue;  // already split by balancing: the mark is met
+  for (CellId c : marks.split) {
+    if (!alive(c)) continue;  // dead, or already split by balancing: the mark is met
     if (cells_[c].level >= options_.max_level) {
       ++r.n_refused_split;
       continue;
@@ -332,20 +358,18 @@ AdaptReport CellGraph<Dim>::adapt(std::span<const Mark> marks) {
     split_balanced(c, r);
   }
   long n_merged_cells = 0;
-  for (CellId c : to_merge) {
-    if (!cells_[c].alive || morton::child_index<Dim>(cells_[c].key) != 0) continue;
+  for (CellId c : marks.merge) {
+    if (!alive(c) || !marked_merge(c) || morton::child_index<Dim>(cells_[c].key) != 0) continue;
     const auto group = siblings(c);
     if (!group) continue;
     bool all = true;
-    for (CellId s : *group)
-      all = all && cell_birth_[s] < epoch_ && static_cast<std::size_t>(s) < marks.size() &&
-            marks[s] == Mark::merge;
+    for (CellId s : *group) all = all && cell_birth_[s] < epoch_ && marked_merge(s);
     if (!all || !merge_allowed(*group)) continue;
     merge_raw(*group);
     ++r.n_merged;
     n_merged_cells += n_children;
   }
-  r.n_refused_merge = static_cast<long>(to_merge.size()) - n_merged_cells;
+  r.n_refused_merge = n_merge_marked - n_merged_cells;
   end_change(&r);
   return r;
 }
@@ -361,7 +385,8 @@ AdaptReport CellGraph<Dim>::adapt(std::span<const Mark> marks) {
   template CellId CellGraph<D>::merge_raw(const std::array<CellId, CellGraph<D>::n_children>&);          \
   template std::array<CellId, CellGraph<D>::n_children> CellGraph<D>::split(CellId, AdaptReport*);       \
   template CellId CellGraph<D>::merge(std::span<const CellId>, AdaptReport*);                            \
-  template AdaptReport CellGraph<D>::adapt(std::span<const Mark>);
+  template AdaptReport CellGraph<D>::adapt(std::span<const Mark>);                                       \
+  template AdaptReport CellGraph<D>::adapt(MarkList&);
 LIQUID_CELL_GRAPH_CHANGE(2)
 LIQUID_CELL_GRAPH_CHANGE(3)
 #undef LIQUID_CELL_GRAPH_CHANGE

@@ -1,6 +1,7 @@
 // Tree builders: uniform counts, bands around a level set at the right levels, one-level shifts
 // for convergence rows, seeded random trees under each jump limit, and narrow-band re-adaptation
-// by mark + adapt reaching the tree a fresh build gives.
+// by mark + adapt reaching the tree a fresh build gives, and the band tracker marking exactly what
+// a visit of every cell marks.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -8,6 +9,7 @@
 #include <set>
 
 #include "liquid/core/error.hpp"
+#include "liquid/tree/band_tracker.hpp"
 #include "liquid/tree/builders.hpp"
 
 namespace liquid {
@@ -215,6 +217,118 @@ TYPED_TEST(BuildersTest, NarrowBandReadaptationReachesAFreshBuild) {
       EXPECT_NEAR(static_cast<double>(g.n_cells()), fresh.n_cells(), 0.05 * fresh.n_cells());
     }
   }
+}
+
+/// The dense marks as sorted sparse lists.
+MarkList as_list(const std::vector<Mark>& marks, int capacity) {
+  MarkList out;
+  for (CellId c = 0; c < capacity; ++c) {
+    if (marks[c] == Mark::split) out.split.push_back(c);
+    if (marks[c] == Mark::merge) out.merge.push_back(c);
+  }
+  return out;
+}
+
+TYPED_TEST(BuildersTest, BandTrackerMarksWhatAFullVisitMarks) {
+  constexpr int Dim = TypeParam::value;
+  const int fine = Dim == 2 ? 8 : 6;
+  const double h = std::ldexp(1.0, -fine);
+  // Coarse levels far below the band (most of the tree refined) and close to it (most cells
+  // coarse, where the tracker's coarse frontier matters); bands narrow and wide.
+  for (int coarse : {1, fine - 3}) {
+    for (double band : {1.0, 3.0}) {
+      for (int jump : {1, 2, unlimited_jump}) {
+        SCOPED_TRACE(::testing::Message() << "coarse " << coarse << " band " << band << " jump " << jump);
+        CellGraphOptions<Dim> options;
+        options.max_jump = jump;
+        Vec<Dim> centre = Vec<Dim>::Constant(0.45);
+        const double radius = 0.23;
+        auto dense =
+            tree::narrow_band<Dim>(Box<Dim>{}, sphere<Dim>(centre, radius), coarse, fine, band, options);
+        auto sparse = dense;
+        tree::NarrowBandTracker<Dim> tracker(sparse, coarse, fine, band);
+        std::vector<Mark> marks;
+        MarkList list;
+        // The first call visits every cell. A fresh tree can already carry marks: merges of the
+        // cells the level-jump balancing split, which adapt() refuses.
+        tree::mark_narrow_band<Dim>(dense, sphere<Dim>(centre, radius), coarse, fine, band, marks);
+        tracker.mark(sparse, sphere<Dim>(centre, radius), list);
+        EXPECT_EQ(list.split.size(), as_list(marks, dense.cell_capacity()).split.size());
+        EXPECT_EQ(list.merge.size(), as_list(marks, dense.cell_capacity()).merge.size());
+        // The sphere moves one fine cell per step along a diagonal-ish path.
+        for (int step = 0; step < 12; ++step) {
+          centre[step % Dim] += (step % 5 == 4 ? -1.0 : 1.0) * h;
+          const auto phi = sphere<Dim>(centre, radius);
+          tree::mark_narrow_band<Dim>(dense, phi, coarse, fine, band, marks);
+          tracker.mark(sparse, phi, list);
+          if (coarse > 1) {  // with a level-1 background nearly every cell is refined
+            EXPECT_LT(static_cast<long>(tracker.candidates().size()), sparse.n_cells());
+          }
+          MarkList got = list;
+          std::sort(got.split.begin(), got.split.end());
+          std::sort(got.merge.begin(), got.merge.end());
+          const MarkList want = as_list(marks, dense.cell_capacity());
+          ASSERT_EQ(got.split, want.split) << "step " << step;
+          ASSERT_EQ(got.merge, want.merge) << "step " << step;
+          const AdaptReport a = dense.adapt(marks);
+          const AdaptReport b = sparse.adapt(list);
+          tracker.update(sparse, b);
+          EXPECT_EQ(a.new_cells, b.new_cells);
+          EXPECT_EQ(a.removed_cells, b.removed_cells);
+          EXPECT_EQ(a.n_refused_merge, b.n_refused_merge);
+          ASSERT_EQ(leaf_set(dense), leaf_set(sparse)) << "step " << step;
+          const InvariantReport r = sparse.check_invariants();
+          ASSERT_TRUE(r.ok()) << r.text();
+        }
+      }
+    }
+  }
+}
+
+TYPED_TEST(BuildersTest, BandTrackerConvergesToAFreshBuild) {
+  constexpr int Dim = TypeParam::value;
+  const int fine = Dim == 2 ? 8 : 6, coarse = 2;
+  const double h = std::ldexp(1.0, -fine);
+  CellGraphOptions<Dim> options;
+  options.max_jump = unlimited_jump;
+  Vec<Dim> centre = Vec<Dim>::Constant(0.5);
+  // Start from a uniform coarse tree: the first mark visits everything, later ones the band.
+  auto g = tree::uniform<Dim>(Box<Dim>{}, coarse, options);
+  tree::NarrowBandTracker<Dim> tracker(g, coarse, fine, 2.0);
+  MarkList marks;
+  for (int step = 0; step < 40; ++step) {
+    if (step % 4 == 3 && step < 30) centre[0] += h;  // every fourth round, by one fine cell
+    const auto phi = sphere<Dim>(centre, 0.3);
+    tracker.mark(g, phi, marks);
+    tracker.update(g, g.adapt(marks));
+  }
+  ASSERT_TRUE(g.check_invariants().ok());
+  const auto fresh = tree::narrow_band<Dim>(Box<Dim>{}, sphere<Dim>(centre, 0.3), coarse, fine, 2.0, options);
+  // Each round refines one level, so (fine - coarse) rounds after the last move the tree is fresh.
+  EXPECT_EQ(leaf_set(g), leaf_set(fresh));
+  EXPECT_GT(tracker.n_refined(), 0);
+}
+
+TEST(MarkList, AdaptIgnoresRepeatsAndDeadIdsAndNeedsWholeGroups) {
+  auto g = tree::uniform<2>(Box<2>{}, 2);
+  MarkList marks;
+  marks.split = {3, 3, 3};
+  AdaptReport r = g.adapt(marks);
+  EXPECT_EQ(r.n_split, 1);
+  EXPECT_EQ(g.n_cells(), 16 + 3);
+  EXPECT_FALSE(g.alive(3));
+  // Three of four siblings listed: no merge, three refusals; a dead id is skipped.
+  const auto group = *g.siblings(r.new_cells[0]);
+  marks.clear();
+  marks.merge = {group[0], group[1], group[2], 3};
+  r = g.adapt(marks);
+  EXPECT_EQ(r.n_merged, 0);
+  EXPECT_EQ(r.n_refused_merge, 3);
+  marks.merge = {group[3], group[2], group[1], group[0]};
+  r = g.adapt(marks);
+  EXPECT_EQ(r.n_merged, 1);
+  EXPECT_EQ(g.n_cells(), 16);
+  EXPECT_TRUE(g.check_invariants().ok());
 }
 
 }  // namespace

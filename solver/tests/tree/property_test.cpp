@@ -4,6 +4,7 @@
 // remap and a per-axis constant face field kept exactly.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <random>
 #include <set>
@@ -29,30 +30,47 @@ class Property {
   }
 
   static constexpr int max_level = Dim == 2 ? 7 : 5;
-  static constexpr int max_cells = Dim == 2 ? 600 : 1200;
+  static constexpr int max_cells = Dim == 2 ? 1500 : 1200;
 
   void step() {
     const auto ids = graph_.cell_ids();
-    const CellId c = ids[std::uniform_int_distribution<std::size_t>(0, ids.size() - 1)(rng_)];
     const double u = std::uniform_real_distribution<double>(0, 1)(rng_);
     const bool crowded = graph_.n_cells() > max_cells;
     AdaptReport report;
     if (u < 0.1) {
+      // Dense marks, or the same kind of marks as sparse lists in random order with repeats.
       std::vector<Mark> marks(graph_.cell_capacity(), Mark::keep);
+      MarkList list;
       for (CellId x : ids) {
         const double v = std::uniform_real_distribution<double>(0, 1)(rng_);
         marks[x] = v < (crowded ? 0.01 : 0.05) ? Mark::split : (v < 0.6 ? Mark::merge : Mark::keep);
+        if (marks[x] != Mark::keep) {
+          auto& l = marks[x] == Mark::split ? list.split : list.merge;
+          l.push_back(x);
+          if (v < 0.02 || (v > 0.3 && v < 0.32)) l.push_back(x);
+        }
       }
-      report = graph_.adapt(marks);
+      if (n_adapts_ % 2 == 0) {
+        report = graph_.adapt(marks);
+      } else {
+        std::shuffle(list.split.begin(), list.split.end(), rng_);
+        std::shuffle(list.merge.begin(), list.merge.end(), rng_);
+        report = graph_.adapt(list);
+      }
       ++n_adapts_;
     } else if (u < 0.6 && !crowded) {
+      // A few draws for a cell that can still split: uniform picks favour the finest cells.
+      CellId c = ids[std::uniform_int_distribution<std::size_t>(0, ids.size() - 1)(rng_)];
+      for (int k = 0; k < 8 && graph_.level(c) >= max_level; ++k)
+        c = ids[std::uniform_int_distribution<std::size_t>(0, ids.size() - 1)(rng_)];
       if (graph_.level(c) >= max_level) return;
       const int before = graph_.n_cells();
       const auto children = graph_.split(c, &report);
       for (CellId k : children) ASSERT_TRUE(graph_.alive(k));
       ASSERT_GE(graph_.n_cells(), before + (1 << Dim) - 1);
-      ++n_splits_;
+      n_splits_ += report.n_split;  // balancing splits included
     } else {
+      const CellId c = ids[std::uniform_int_distribution<std::size_t>(0, ids.size() - 1)(rng_)];
       const auto group = graph_.siblings(c);
       if (!group) return;
       if (!graph_.can_merge(c)) {
@@ -132,10 +150,11 @@ template <int Dim>
 void run(int jump, int n_ops) {
   long total_splits = 0, total_merges = 0, total_adapts = 0, total_refused = 0;
   int worst = 0;
-  for (std::uint64_t seed : {1u, 2u}) {
+  const int n_seeds = 4;
+  for (std::uint64_t seed = 1; seed <= n_seeds; ++seed) {
     Property<Dim> p(jump, seed * 1000 + jump);
     p.check(AdaptReport{});
-    for (int i = 0; i < n_ops / 2; ++i) {
+    for (int i = 0; i < n_ops / n_seeds; ++i) {
       p.step();
       if (::testing::Test::HasFatalFailure()) {
         ADD_FAILURE() << "Dim " << Dim << " jump " << jump << " seed " << seed << " step " << i;
@@ -148,8 +167,10 @@ void run(int jump, int n_ops) {
     total_refused += p.n_refused_;
     worst = std::max(worst, p.worst_jump());
   }
-  std::printf("Dim %d jump %d: %ld splits, %ld merges, %ld refused merges, %ld adapts, worst jump %d\n", Dim,
-              jump, total_splits, total_merges, total_refused, total_adapts, worst);
+  std::printf(
+      "Dim %d jump %d: %ld cells split (balancing included), %ld merges, %ld refused merges, %ld adapts, "
+      "worst jump %d\n",
+      Dim, jump, total_splits, total_merges, total_refused, total_adapts, worst);
   EXPECT_GT(total_splits, n_ops / 20);
   EXPECT_GT(total_merges, n_ops / 20);
   EXPECT_LE(worst, jump);
@@ -161,35 +182,39 @@ void run(int jump, int n_ops) {
   }
 }
 
+// Random operations per jump limit (each followed by the full invariant check), over four seeds.
+constexpr int n_ops_2d = 8000;
+constexpr int n_ops_3d = 3000;
+
 TEST(CellGraphProperty, Graded2D) {
-  run<2>(1, 1200);
+  run<2>(1, n_ops_2d);
 }
 TEST(CellGraphProperty, Jump2In2D) {
-  run<2>(2, 1200);
+  run<2>(2, n_ops_2d);
 }
 TEST(CellGraphProperty, Jump3In2D) {
-  run<2>(3, 1200);
+  run<2>(3, n_ops_2d);
 }
 TEST(CellGraphProperty, Jump4In2D) {
-  run<2>(4, 1200);
+  run<2>(4, n_ops_2d);
 }
 TEST(CellGraphProperty, Unlimited2D) {
-  run<2>(unlimited_jump, 1200);
+  run<2>(unlimited_jump, n_ops_2d);
 }
 TEST(CellGraphProperty, Graded3D) {
-  run<3>(1, 600);
+  run<3>(1, n_ops_3d);
 }
 TEST(CellGraphProperty, Jump2In3D) {
-  run<3>(2, 600);
+  run<3>(2, n_ops_3d);
 }
 TEST(CellGraphProperty, Jump3In3D) {
-  run<3>(3, 600);
+  run<3>(3, n_ops_3d);
 }
 TEST(CellGraphProperty, Jump4In3D) {
-  run<3>(4, 600);
+  run<3>(4, n_ops_3d);
 }
 TEST(CellGraphProperty, Unlimited3D) {
-  run<3>(unlimited_jump, 600);
+  run<3>(unlimited_jump, n_ops_3d);
 }
 
 }  // namespace

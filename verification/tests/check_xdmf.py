@@ -1,0 +1,116 @@
+#!/usr/bin/env python3
+"""Checks XDMF files against the HDF5 files they reference, reading the HDF5 side with h5dump.
+
+    check_xdmf.py FILE.xmf [FILE.xmf ...]
+
+For every file: the XML parses; h5dump reads each referenced HDF5 file whole; every HDF DataItem
+("file.h5:/path") names a dataset whose shape equals the item's Dimensions and whose type matches
+its NumberType and Precision; a Topology's NumberOfElements equals its item's first dimension; and
+every cell-centred Attribute has one value per element. Exit status 0 when all hold, 1 otherwise,
+with one line per problem naming the file and the dataset.
+"""
+import os
+import re
+import subprocess
+import sys
+import xml.etree.ElementTree as ET
+
+# XDMF (NumberType, Precision) -> the h5dump names of the matching HDF5 types.
+TYPES = {
+    ("Float", "8"): {"H5T_IEEE_F64LE", "H5T_IEEE_F64BE"},
+    ("Float", "4"): {"H5T_IEEE_F32LE", "H5T_IEEE_F32BE"},
+    ("Int", "8"): {"H5T_STD_I64LE", "H5T_STD_I64BE"},
+    ("Int", "4"): {"H5T_STD_I32LE", "H5T_STD_I32BE"},
+    ("UInt", "8"): {"H5T_STD_U64LE", "H5T_STD_U64BE"},
+    ("UInt", "4"): {"H5T_STD_U32LE", "H5T_STD_U32BE"},
+}
+
+
+def h5dump_header(h5_path, dataset=None):
+    """h5dump -H output for the file or one dataset; raises RuntimeError when h5dump fails."""
+    cmd = ["h5dump", "-H"] + (["-d", dataset] if dataset else []) + [h5_path]
+    run = subprocess.run(cmd, capture_output=True, text=True)
+    if run.returncode != 0:
+        raise RuntimeError(f"{' '.join(cmd)} failed ({run.returncode}): {run.stderr.strip()}")
+    return run.stdout
+
+
+def dataset_shape_and_type(header):
+    dtype = re.search(r"DATATYPE\s+(\S+)", header)
+    space = re.search(r"DATASPACE\s+SIMPLE\s*\{\s*\(([^)]*)\)", header)
+    if not dtype or not space:
+        return None, None
+    return [int(x) for x in space.group(1).split(",")], dtype.group(1)
+
+
+def check(xmf_path):
+    problems = []
+    folder = os.path.dirname(os.path.abspath(xmf_path))
+    try:
+        root = ET.parse(xmf_path).getroot()
+    except (ET.ParseError, OSError) as e:
+        return [f"{xmf_path}: not readable XML ({e})"]
+    if root.tag != "Xdmf":
+        problems.append(f"{xmf_path}: the root element is <{root.tag}>, not <Xdmf>")
+    read_whole = set()
+    n_items = 0
+    for grid in root.iter("Grid"):
+        n_elements = None
+        topology = grid.find("Topology")
+        if topology is not None and topology.get("NumberOfElements"):
+            n_elements = int(topology.get("NumberOfElements"))
+        for parent in grid:
+            for item in parent.iter("DataItem"):
+                if item.get("Format") != "HDF":
+                    continue
+                n_items += 1
+                ref = (item.text or "").strip()
+                if ":" not in ref:
+                    problems.append(f"{xmf_path}: DataItem '{ref}' is not FILE:/DATASET")
+                    continue
+                h5_name, dataset = ref.split(":", 1)
+                h5_path = os.path.join(folder, h5_name)
+                where = f"{xmf_path}: {h5_name}:{dataset}"
+                try:
+                    if h5_path not in read_whole:
+                        h5dump_header(h5_path)
+                        read_whole.add(h5_path)
+                    shape, dtype = dataset_shape_and_type(h5dump_header(h5_path, dataset))
+                except RuntimeError as e:
+                    problems.append(f"{where}: {e}")
+                    continue
+                if shape is None:
+                    problems.append(f"{where}: h5dump shows no simple dataspace and type")
+                    continue
+                want = [int(x) for x in item.get("Dimensions", "").split()]
+                if shape != want:
+                    problems.append(f"{where}: shape {shape} in the HDF5 file, Dimensions {want} in the XDMF")
+                key = (item.get("NumberType", "Float"), item.get("Precision", "4"))
+                if dtype not in TYPES.get(key, set()):
+                    problems.append(f"{where}: type {dtype} in the HDF5 file, {key[0]} {key[1]} in the XDMF")
+                if parent.tag == "Topology" and n_elements is not None and shape[0] != n_elements:
+                    problems.append(f"{where}: {shape[0]} rows for NumberOfElements {n_elements}")
+                if parent.tag == "Attribute" and parent.get("Center") == "Cell" and n_elements is not None \
+                        and shape[0] != n_elements:
+                    problems.append(f"{where}: {shape[0]} values for {n_elements} cells")
+    if n_items == 0:
+        problems.append(f"{xmf_path}: no HDF DataItem")
+    return problems
+
+
+def main(paths):
+    if not paths:
+        print(__doc__.strip().splitlines()[2].strip(), file=sys.stderr)
+        return 2
+    problems = []
+    for path in paths:
+        found = check(path)
+        problems += found
+        print(f"{path}: {'ok' if not found else f'{len(found)} problem(s)'}")
+    for p in problems:
+        print(p)
+    return 1 if problems else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
