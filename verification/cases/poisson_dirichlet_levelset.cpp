@@ -15,6 +15,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "cases/paper_studies.hpp"
 #include "common/poisson_study.hpp"
 #include "liquid/tree/builders.hpp"
 
@@ -27,6 +28,8 @@ double radial(const Vec<Dim>& x) {  // x^2 (+ y^2): the squared distance off the
   for (int k = 0; k + 1 < Dim; ++k) r += x[k] * x[k];
   return r;
 }
+
+}  // namespace
 
 template <int Dim>
 PoissonStudy<Dim> dirichlet_study(bool full) {
@@ -69,6 +72,10 @@ PoissonStudy<Dim> dirichlet_study(bool full) {
     s.level_min = 2, s.level_max = full ? 5 : 4;
   return s;
 }
+template PoissonStudy<2> dirichlet_study<2>(bool);
+template PoissonStudy<3> dirichlet_study<3>(bool);
+
+namespace {
 
 CaseResult run2(const CaseOptions& o) {
   return run_poisson_study<2>(dirichlet_study<2>(o.full), o);

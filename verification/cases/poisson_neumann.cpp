@@ -16,13 +16,14 @@
 
 #include <fmt/format.h>
 
+#include "cases/paper_studies.hpp"
 #include "common/fit.hpp"
 #include "common/poisson_study.hpp"
 #include "liquid/levelset/levelset.hpp"
 #include "liquid/tree/builders.hpp"
 
 namespace liquid::verification {
-namespace {
+namespace {}  // namespace
 
 template <int Dim>
 PoissonStudy<Dim> neumann_study(bool full) {
@@ -58,6 +59,10 @@ PoissonStudy<Dim> neumann_study(bool full) {
     s.level_min = 3, s.level_max = full ? 5 : 4;
   return s;
 }
+template PoissonStudy<2> neumann_study<2>(bool);
+template PoissonStudy<3> neumann_study<3>(bool);
+
+namespace {
 
 // Which irregular-stencil rule gives the best L-inf? The same study under each rule.
 template <int Dim>
