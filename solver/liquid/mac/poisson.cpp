@@ -1,6 +1,9 @@
 #include "liquid/mac/poisson.hpp"
 
+#include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 
 #include <fmt/format.h>
@@ -8,6 +11,7 @@
 #include "liquid/core/error.hpp"
 #include "liquid/core/timer.hpp"
 #include "liquid/rbf/polynomial.hpp"
+#include "liquid/rbf/weight_cache.hpp"
 
 namespace liquid::mac {
 
@@ -122,16 +126,41 @@ void fd_row(const CellGraph<Dim>& graph, const DofLayout<Dim>& layout, CellId c,
 }
 
 // Weights of an operator on gathered nodes, dropping an offending node and retrying when the
-// system is unusable. Returns the status of the final attempt.
+// system is unusable. Returns the status of the final attempt. With a cache, stencils whose nodes
+// all sit on the tree (cell centres and their wall images, no interface crossings) are looked up
+// by their shape relative to the scale h: congruent T-junctions share one solve.
 template <int Dim>
 rbf::Status stencil_weights(std::vector<StencilNode<Dim>>& nodes, const Vec<Dim>& at,
                             const rbf::Operator<Dim>& op, const rbf::Config& config, std::vector<double>& w,
-                            long& n_retried) {
+                            long& n_retried, rbf::WeightCache<Dim>* cache = nullptr, double h = 0.0) {
   thread_local std::vector<Vec<Dim>> xs;
-  for (int attempt = 0; attempt < 4; ++attempt) {
+  if (cache != nullptr) {
+    // A canonical node order, so congruent stencils gathered in different orders share an entry:
+    // by distance from `at`, ties by offset, on offsets rounded to 2^-20 h (the farthest node
+    // stays last for the retry below). Weights follow their nodes, so the caller sees no change.
+    using Key = std::array<std::int64_t, Dim + 1>;
+    thread_local std::vector<std::pair<Key, StencilNode<Dim>>> keyed;
+    keyed.clear();
+    for (const auto& n : nodes) {
+      Key k{};
+      for (int d = 0; d < Dim; ++d) {
+        k[d + 1] = std::llround((n.x[d] - at[d]) / h * 0x1p20);
+        k[0] += k[d + 1] * k[d + 1];
+      }
+      keyed.emplace_back(k, n);
+    }
+    std::stable_sort(keyed.begin(), keyed.end(),
+                     [](const auto& a, const auto& b) { return a.first < b.first; });
+    for (std::size_t j = 0; j < nodes.size(); ++j) nodes[j] = keyed[j].second;
+  }
+  const auto solve = [&] {
     xs.clear();
     for (const auto& n : nodes) xs.push_back(n.x);
-    const rbf::Status st = rbf::weights<Dim>(xs, at, op, config, w);
+    return cache != nullptr ? cache->weights(xs, at, h, op, config, w)
+                            : rbf::weights<Dim>(xs, at, op, config, w);
+  };
+  for (int attempt = 0; attempt < 4; ++attempt) {
+    const rbf::Status st = solve();
     if (st.usable()) return st;
     if (st.info == rbf::Info::coincident_nodes && st.node_b > 0) {
       nodes.erase(nodes.begin() + st.node_b);  // keep the nearer of the two
@@ -142,9 +171,18 @@ rbf::Status stencil_weights(std::vector<StencilNode<Dim>>& nodes, const Vec<Dim>
     }
     ++n_retried;
   }
-  xs.clear();
-  for (const auto& n : nodes) xs.push_back(n.x);
-  return rbf::weights<Dim>(xs, at, op, config, w);
+  return solve();
+}
+
+/// The cache to use for a stencil: none when it holds an interface crossing (a level-set problem's
+/// known node), whose position is arbitrary and would only fill the cache.
+template <int Dim>
+rbf::WeightCache<Dim>* cache_for(const std::vector<StencilNode<Dim>>& nodes, const DofLayout<Dim>& layout,
+                                 rbf::WeightCache<Dim>* cache) {
+  if (cache == nullptr || !layout.levelset) return cache;
+  for (const auto& n : nodes)
+    if (n.dof < 0) return nullptr;
+  return cache;
 }
 
 template <int Dim>
@@ -176,6 +214,8 @@ PoissonSystem<Dim> assemble_poisson(const CellGraph<Dim>& graph, const PoissonPr
 
   std::vector<Row> rows(n);
   const int n_target = target_nodes<Dim>(options);
+  rbf::WeightCache<Dim> weight_cache;
+  rbf::WeightCache<Dim>* const cache = options.cache_weights ? &weight_cache : nullptr;
   AssemblyStats stats;
   std::string failure;
   long n_fd = 0, n_rbf = 0, n_reduced = 0, n_retried = 0, n_on_interface = 0;
@@ -220,7 +260,8 @@ PoissonSystem<Dim> assemble_poisson(const CellGraph<Dim>& graph, const PoissonPr
           continue;
         }
         const rbf::Status st =
-            stencil_weights<Dim>(nodes, x, rbf::Operator<Dim>::lap(), options.rbf, w, n_retried);
+            stencil_weights<Dim>(nodes, x, rbf::Operator<Dim>::lap(), options.rbf, w, n_retried,
+                                 cache_for<Dim>(nodes, sys.layout, cache), graph.cell_size(c)[0]);
         LIQUID_VERIFY(st.usable(), "cell {} at ({:.6g}): RBF-FD Laplacian weights unusable: {}", c,
                       fmt::join(x.data(), x.data() + Dim, ", "), st.describe());
         ++n_rbf;
@@ -252,6 +293,7 @@ PoissonSystem<Dim> assemble_poisson(const CellGraph<Dim>& graph, const PoissonPr
   stats.n_degree_reduced = n_reduced;
   stats.n_retried = n_retried;
   stats.n_on_interface = n_on_interface;
+  stats.n_cache_hits = weight_cache.hits();
 
   const long size = n + (sys.bordered ? 1 : 0);
   std::vector<Eigen::Triplet<double>> triplets;
@@ -304,6 +346,8 @@ std::vector<double> face_normal_derivative(const CellGraph<Dim>& graph, const Po
   const auto& layout = system.layout;
   std::string failure;
   long n_retried = 0;
+  rbf::WeightCache<Dim> weight_cache;
+  rbf::WeightCache<Dim>* const cache = options.cache_weights ? &weight_cache : nullptr;
 #pragma omp parallel reduction(+ : n_retried)
   {
     std::vector<StencilNode<Dim>> nodes;
@@ -324,7 +368,9 @@ std::vector<double> face_normal_derivative(const CellGraph<Dim>& graph, const Po
         const CellId seeds[2] = {g.cell[0], g.cell[1]};
         gather_stencil<Dim>(graph, layout, seeds, at, options.rule, n_target, nodes);
         const rbf::Status st =
-            stencil_weights<Dim>(nodes, at, rbf::Operator<Dim>::partial(g.axis), config, w, n_retried);
+            stencil_weights<Dim>(nodes, at, rbf::Operator<Dim>::partial(g.axis), config, w, n_retried,
+                                 cache_for<Dim>(nodes, layout, cache),
+                                 std::min(graph.cell_size(g.cell[0])[0], graph.cell_size(g.cell[1])[0]));
         LIQUID_VERIFY(st.usable(), "face {} between cells {} and {}: RBF-FD gradient weights unusable: {}", f,
                       g.cell[0], g.cell[1], st.describe());
         double v = 0.0;

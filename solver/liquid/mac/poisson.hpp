@@ -35,6 +35,10 @@ struct PoissonOptions {
   double growth = 2.0;                   ///< irregular stencils get growth * (polynomial terms) + 1 nodes
   bool regular_fd = true;                ///< plain FD where the neighbourhood is regular
   Nullspace nullspace = Nullspace::pin;  ///< for pure Neumann problems
+  /// Share RBF-FD weights between congruent stencils within one assembly (rbf::WeightCache):
+  /// T-junctions of one layout repeat across the tree and across levels. Stencils holding an
+  /// interface crossing are always solved directly.
+  bool cache_weights = true;
 };
 
 template <int Dim>
@@ -53,8 +57,9 @@ struct AssemblyStats {
   long n_degree_reduced = 0;  ///< RBF rows whose stencil could not carry the requested degree
   long n_retried = 0;         ///< RBF rows that needed a node dropped (coincident or singular)
   long n_on_interface = 0;    ///< centres within 1e-3 cell sizes of the interface, set to its value
+  long n_cache_hits = 0;      ///< RBF rows whose weights came from the cache (cache_weights)
   int min_degree = 99;
-  double worst_condition = 0.0;
+  double worst_condition = 0.0;  ///< of the local RBF systems (cached ones: at unit scale)
   CellId worst_condition_cell = no_cell;
   double seconds = 0.0;
 };
