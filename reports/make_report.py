@@ -70,6 +70,7 @@ PAPER = {
     "poisson-dirichlet-levelset-3d": "not in the paper; 2 is the goal",
     "poisson-hard": "levels up to 2 tried in the paper (section 8)",
     "poisson-stencil-rules": "1-ring grown by k-ring (section 4.2)",
+    "poisson-rbf-degree": "degree 2 (Pi_2, section 7), about 2 for p and grad p",
 }
 
 
