@@ -5,8 +5,8 @@
 //
 // Args: cache (0 off, 1 on); degree; scene: 0 a band around a sphere (the poisson-neumann-3d
 // tree: T-junction layouts vary along the curved band), 1 a band around a plane (a still pool's
-// surface: the layouts repeat along it). Counters: unknowns, RBF-FD rows, rows whose weights came
-// from the cache.
+// surface: the layouts repeat along it). Counters (of the last iteration): unknowns, RBF-FD
+// rows, weight lookups the cache served.
 #include <benchmark/benchmark.h>
 #include <omp.h>
 

@@ -67,13 +67,17 @@ void BM_TreeBuild(benchmark::State& state) {
 }
 BENCHMARK(BM_TreeBuild)->DenseRange(0, 4)->Unit(benchmark::kMillisecond)->UseRealTime();
 
-/// Random splits and merges of single cells on a seeded random non-graded octree (levels 2-7,
-/// ~100k leaves) under each level-jump limit: splitting a fine cell next to coarse ones forces
-/// balancing splits, which are counted (balance_per_split) and included in the rates.
+/// Random splits and merges of single cells on a seeded random non-graded octree (levels 2-7)
+/// under each level-jump limit: splitting a fine cell next to coarse ones forces balancing splits,
+/// counted in balance_per_split. Each iteration draws a leaf and tries a split (up to level 8) or
+/// the merge of its sibling group; tries that change nothing are timed too. ops_per_s counts the
+/// cells split (balancing included) and the groups merged. The tree drifts (splits succeed more
+/// often than merges), so leaves_start and leaves (at the end) bracket its size.
 void BM_TreeSplitMerge(benchmark::State& state) {
   CellGraphOptions<3> options;
   options.max_jump = static_cast<int>(state.range(0));
   CellGraph<3> g = tree::random<3>(Box<3>{}, 7, 2, 7, 0.35, options);
+  const int leaves_start = g.n_cells();
   std::mt19937_64 rng(1);
   long splits = 0, balance = 0, merges = 0, tries = 0;
   const int max_level = 8;
@@ -103,6 +107,8 @@ void BM_TreeSplitMerge(benchmark::State& state) {
   state.counters["splits"] = static_cast<double>(splits);
   state.counters["merges"] = static_cast<double>(merges);
   state.counters["balance_per_split"] = static_cast<double>(balance) / std::max(1L, splits - balance);
+  state.counters["tries"] = static_cast<double>(tries);
+  state.counters["leaves_start"] = leaves_start;
   state.counters["leaves"] = g.n_cells();
 }
 BENCHMARK(BM_TreeSplitMerge)->Arg(1)->Arg(2)->Arg(unlimited_jump)->UseRealTime();

@@ -3,11 +3,12 @@
 
     check_xdmf.py FILE.xmf [FILE.xmf ...]
 
-For every file: the XML parses; h5dump reads each referenced HDF5 file whole; every HDF DataItem
+For every file: the XML parses; h5dump reads each referenced HDF5 file whole (data included); every
+HDF DataItem
 ("file.h5:/path") names a dataset whose shape equals the item's Dimensions and whose type matches
 its NumberType and Precision; a Topology's NumberOfElements equals its item's first dimension; and
 every cell-centred Attribute has one value per element. Exit status 0 when all hold, 1 otherwise,
-with one line per problem naming the file and the dataset.
+with one line per problem naming the file and the dataset; 2 when h5dump cannot be run at all.
 """
 import os
 import re
@@ -26,10 +27,28 @@ TYPES = {
 }
 
 
-def h5dump_header(h5_path, dataset=None):
-    """h5dump -H output for the file or one dataset; raises RuntimeError when h5dump fails."""
-    cmd = ["h5dump", "-H"] + (["-d", dataset] if dataset else []) + [h5_path]
-    run = subprocess.run(cmd, capture_output=True, text=True)
+class NoH5dump(Exception):
+    pass
+
+
+def run_h5dump(cmd):
+    try:
+        return subprocess.run(cmd, capture_output=True, text=True)
+    except FileNotFoundError as e:
+        raise NoH5dump(f"cannot run h5dump ({e}); it comes with Debian's hdf5-tools") from e
+
+
+def h5dump_all(h5_path):
+    """Reads the whole file, data included; raises RuntimeError when h5dump fails."""
+    run = run_h5dump(["h5dump", h5_path])
+    if run.returncode != 0:
+        raise RuntimeError(f"h5dump {h5_path} failed ({run.returncode}): {run.stderr.strip()}")
+
+
+def h5dump_header(h5_path, dataset):
+    """h5dump -H output for one dataset; raises RuntimeError when h5dump fails."""
+    cmd = ["h5dump", "-H", "-d", dataset, h5_path]
+    run = run_h5dump(cmd)
     if run.returncode != 0:
         raise RuntimeError(f"{' '.join(cmd)} failed ({run.returncode}): {run.stderr.strip()}")
     return run.stdout
@@ -73,7 +92,7 @@ def check(xmf_path):
                 where = f"{xmf_path}: {h5_name}:{dataset}"
                 try:
                     if h5_path not in read_whole:
-                        h5dump_header(h5_path)
+                        h5dump_all(h5_path)
                         read_whole.add(h5_path)
                     shape, dtype = dataset_shape_and_type(h5dump_header(h5_path, dataset))
                 except RuntimeError as e:
@@ -104,7 +123,11 @@ def main(paths):
         return 2
     problems = []
     for path in paths:
-        found = check(path)
+        try:
+            found = check(path)
+        except NoH5dump as e:
+            print(e, file=sys.stderr)
+            return 2
         problems += found
         print(f"{path}: {'ok' if not found else f'{len(found)} problem(s)'}")
     for p in problems:

@@ -136,15 +136,17 @@ rbf::Status stencil_weights(std::vector<StencilNode<Dim>>& nodes, const Vec<Dim>
   thread_local std::vector<Vec<Dim>> xs;
   if (cache != nullptr) {
     // A canonical node order, so congruent stencils gathered in different orders share an entry:
-    // by distance from `at`, ties by offset, on offsets rounded to 2^-20 h (the farthest node
-    // stays last for the retry below). Weights follow their nodes, so the caller sees no change.
+    // by distance from `at`, ties by offset, on offsets rounded to 2^-16 h (exact for dyadic
+    // layouts; squares fit in 64 bits for offsets up to 2^14 h). Weights follow their nodes, so
+    // the caller is unaffected, except that a retry below then drops the farthest node by
+    // distance rather than the last one gathered.
     using Key = std::array<std::int64_t, Dim + 1>;
     thread_local std::vector<std::pair<Key, StencilNode<Dim>>> keyed;
     keyed.clear();
     for (const auto& n : nodes) {
       Key k{};
       for (int d = 0; d < Dim; ++d) {
-        k[d + 1] = std::llround((n.x[d] - at[d]) / h * 0x1p20);
+        k[d + 1] = std::llround((n.x[d] - at[d]) / h * 0x1p16);
         k[0] += k[d + 1] * k[d + 1];
       }
       keyed.emplace_back(k, n);

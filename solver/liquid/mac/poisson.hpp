@@ -57,7 +57,7 @@ struct AssemblyStats {
   long n_degree_reduced = 0;  ///< RBF rows whose stencil could not carry the requested degree
   long n_retried = 0;         ///< RBF rows that needed a node dropped (coincident or singular)
   long n_on_interface = 0;    ///< centres within 1e-3 cell sizes of the interface, set to its value
-  long n_cache_hits = 0;      ///< RBF rows whose weights came from the cache (cache_weights)
+  long n_cache_hits = 0;      ///< weight lookups the cache served (cache_weights; retries included)
   int min_degree = 99;
   double worst_condition = 0.0;  ///< of the local RBF systems (cached ones: at unit scale)
   CellId worst_condition_cell = no_cell;

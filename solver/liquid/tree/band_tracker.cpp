@@ -75,12 +75,16 @@ NarrowBandTracker<Dim>::NarrowBandTracker(const CellGraph<Dim>& graph, int coars
   LIQUID_VERIFY(band > 0.0 && max_motion >= 0.0,
                 "NarrowBandTracker: band ({}) must be positive and max_motion ({}) non-negative", band,
                 max_motion);
-  // A coarse cell that must split lies within (band + motion) fine cells plus (sqrt(Dim) - 1) / 2
-  // coarse cells of the old zero set (its distance bound subtracts the half diagonal); every
-  // coarse block within that reach, n blocks per axis, is at most Dim * n face steps away.
-  const double fine_size = std::ldexp(1.0, -fine_level), coarse_size = std::ldexp(1.0, -coarse_level);
-  const double reach = (band + max_motion) * fine_size + 0.5 * (std::sqrt(double(Dim)) - 1.0) * coarse_size;
-  hops_ = Dim * std::max(1, static_cast<int>(std::ceil(reach / coarse_size)));
+  // A coarse cell that must split lies within (band + motion) fine cells of the old zero set plus
+  // half its diagonal less half its shortest side (its distance bound subtracts the half
+  // diagonal; the far point is off a face). Every coarse block within that reach, n blocks along
+  // the shortest side, is at most Dim * n face steps away. Cells are anisotropic on a box that
+  // is not a cube, hence the sizes per axis.
+  const Vec<Dim> coarse_size = graph.domain().size() * std::ldexp(1.0, -coarse_level);
+  const double fine_size = std::ldexp(graph.domain().size().maxCoeff(), -fine_level);
+  const double shortest = coarse_size.minCoeff();
+  const double reach = (band + max_motion) * fine_size + 0.5 * (coarse_size.norm() - shortest);
+  hops_ = Dim * std::max(1, static_cast<int>(std::ceil(reach / shortest)));
   graph.for_each_cell([&](CellId c) {
     if (graph.level(c) != coarse_) refined_.push_back(c);
   });
@@ -93,11 +97,16 @@ void NarrowBandTracker<Dim>::update(const CellGraph<Dim>& graph, const AdaptRepo
   if (is_refined_.size() < static_cast<std::size_t>(graph.cell_capacity()))
     is_refined_.resize(static_cast<std::size_t>(graph.cell_capacity()), 0);
   for (CellId c : report.removed_cells) is_refined_[c] = 0;
-  for (CellId c : report.new_cells)
-    if (graph.level(c) != coarse_ && !is_refined_[c]) {
+  for (CellId c : report.new_cells) {
+    if (graph.level(c) == coarse_) {
+      // Born at the coarse level (a coarser cell was split): the zero set may cross it while no
+      // refined cell is near, so the next round visits it once.
+      born_coarse_.push_back(c);
+    } else if (!is_refined_[c]) {
       is_refined_[c] = 1;
       refined_.push_back(c);
     }
+  }
 }
 
 template <int Dim>
@@ -127,6 +136,12 @@ void NarrowBandTracker<Dim>::gather(const CellGraph<Dim>& graph) {
     }
   refined_.resize(kept);
   candidates_ = refined_;
+  for (CellId c : born_coarse_)
+    if (graph.alive(c) && graph.level(c) == coarse_ && stamp_[c] != round_) {
+      stamp_[c] = round_;
+      candidates_.push_back(c);
+    }
+  born_coarse_.clear();
 
   // Breadth-first through coarse leaves, `hops_` face steps out of the refined set. Only refined
   // cells within the level jump of the coarse level can touch a coarse cell: with a bounded jump
@@ -170,6 +185,7 @@ void NarrowBandTracker<Dim>::mark(const CellGraph<Dim>& graph, const LevelSet<Di
   if (first_) {
     first_ = false;
     candidates_ = graph.cell_ids();
+    born_coarse_.clear();
   } else {
     gather(graph);
   }

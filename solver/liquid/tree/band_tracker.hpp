@@ -2,8 +2,9 @@
 // NarrowBandTracker: re-adapts a narrow-band tree (tree::narrow_band) as its level set moves, at a
 // cost proportional to the band rather than to the whole tree.
 //
-// The tracker keeps the list of refined cells (level > coarse_level), updated from each change
-// report. Marking visits those cells and the coarse cells within `hops` face steps of them: a
+// The tracker keeps the list of cells off the coarse level (level != coarse_level, nearly all of
+// them finer), updated from each change report. Marking visits those cells, the cells born at the
+// coarse level by the last change, and the coarse cells within `hops` face steps of them: a
 // coarse cell that must split after the zero set moved by at most `max_motion` fine cells touches
 // (through a face, an edge or a corner) a block of the coarse grid that the zero set crossed
 // before, and that block was refined, so Dim face steps through coarse leaves reach a refined one
@@ -49,7 +50,7 @@ class NarrowBandTracker {
 
   /// The cells the last mark() call visited.
   std::span<const CellId> candidates() const { return candidates_; }
-  /// Refined cells (level > coarse_level) known to the tracker.
+  /// Cells off the coarse level (level != coarse_level) known to the tracker.
   long n_refined() const { return static_cast<long>(refined_.size()); }
   int hops() const { return hops_; }
 
@@ -65,6 +66,7 @@ class NarrowBandTracker {
   std::vector<std::uint8_t> is_refined_;
   std::vector<std::uint32_t> stamp_;  // == round_ when the cell is a candidate of this round
   std::uint32_t round_ = 0;
+  std::vector<CellId> born_coarse_;  // cells born at the coarse level since the last mark()
   std::vector<CellId> candidates_, frontier_, next_;
 };
 

@@ -326,7 +326,10 @@ AdaptReport CellGraph<Dim>::adapt(std::span<const Mark> marks) {
 
 template <int Dim>
 AdaptReport CellGraph<Dim>::adapt(MarkList& marks) {
+  // Only cells alive now count: a dead id listed here could be handed out again by a split below
+  // and must not be mistaken for the cell born under it.
   for (auto* list : {&marks.split, &marks.merge}) {
+    std::erase_if(*list, [this](CellId c) { return !alive(c); });
     std::sort(list->begin(), list->end());
     list->erase(std::unique(list->begin(), list->end()), list->end());
   }
@@ -338,11 +341,10 @@ AdaptReport CellGraph<Dim>::adapt(MarkList& marks) {
   }
   if (merge_stamp_.size() < cells_.size()) merge_stamp_.resize(cells_.size(), 0u);
   long n_merge_marked = 0;
-  for (CellId c : marks.merge)
-    if (alive(c)) {
-      merge_stamp_[c] = merge_round_;
-      ++n_merge_marked;
-    }
+  for (CellId c : marks.merge) {
+    merge_stamp_[c] = merge_round_;
+    ++n_merge_marked;
+  }
   const auto marked_merge = [&](CellId s) {
     return static_cast<std::size_t>(s) < merge_stamp_.size() && merge_stamp_[s] == merge_round_;
   };
@@ -350,7 +352,7 @@ AdaptReport CellGraph<Dim>::adapt(MarkList& marks) {
   AdaptReport r;
   begin_change();
   for (CellId c : marks.split) {
-    if (!alive(c)) continue;  // dead, or already split by balancing: the mark is met
+    if (!alive(c)) continue;  // already split by balancing: the mark is met
     if (cells_[c].level >= options_.max_level) {
       ++r.n_refused_split;
       continue;

@@ -291,22 +291,74 @@ TYPED_TEST(BuildersTest, BandTrackerConvergesToAFreshBuild) {
   const double h = std::ldexp(1.0, -fine);
   CellGraphOptions<Dim> options;
   options.max_jump = unlimited_jump;
-  Vec<Dim> centre = Vec<Dim>::Constant(0.5);
-  // Start from a uniform coarse tree: the first mark visits everything, later ones the band.
-  auto g = tree::uniform<Dim>(Box<Dim>{}, coarse, options);
-  tree::NarrowBandTracker<Dim> tracker(g, coarse, fine, 2.0);
-  MarkList marks;
-  for (int step = 0; step < 40; ++step) {
-    if (step % 4 == 3 && step < 30) centre[0] += h;  // every fourth round, by one fine cell
-    const auto phi = sphere<Dim>(centre, 0.3);
-    tracker.mark(g, phi, marks);
-    tracker.update(g, g.adapt(marks));
+  // Start from a uniform tree at the coarse level, one level coarser (the first round makes every
+  // cell at the coarse level, which later rounds must still visit), or the root alone.
+  for (int start : {coarse, coarse - 1, 0}) {
+    SCOPED_TRACE(::testing::Message() << "start level " << start);
+    Vec<Dim> centre = Vec<Dim>::Constant(0.5);
+    auto g = tree::uniform<Dim>(Box<Dim>{}, start, options);
+    tree::NarrowBandTracker<Dim> tracker(g, coarse, fine, 2.0);
+    MarkList marks;
+    for (int step = 0; step < 40; ++step) {
+      if (step % 4 == 3 && step < 30) centre[0] += h;  // every fourth round, by one fine cell
+      const auto phi = sphere<Dim>(centre, 0.3);
+      tracker.mark(g, phi, marks);
+      tracker.update(g, g.adapt(marks));
+    }
+    ASSERT_TRUE(g.check_invariants().ok());
+    const auto fresh =
+        tree::narrow_band<Dim>(Box<Dim>{}, sphere<Dim>(centre, 0.3), coarse, fine, 2.0, options);
+    // Each round refines one level, so (fine - start) rounds after the last move the tree is fresh.
+    EXPECT_EQ(leaf_set(g), leaf_set(fresh));
+    EXPECT_GT(tracker.n_refined(), 0);
   }
-  ASSERT_TRUE(g.check_invariants().ok());
-  const auto fresh = tree::narrow_band<Dim>(Box<Dim>{}, sphere<Dim>(centre, 0.3), coarse, fine, 2.0, options);
-  // Each round refines one level, so (fine - coarse) rounds after the last move the tree is fresh.
-  EXPECT_EQ(leaf_set(g), leaf_set(fresh));
-  EXPECT_GT(tracker.n_refined(), 0);
+}
+
+TYPED_TEST(BuildersTest, BandTrackerOnAnisotropicCells) {
+  constexpr int Dim = TypeParam::value;
+  const int fine = Dim == 2 ? 8 : 6, coarse = fine - 3;
+  // A box three times longer than high: cells are flat, and the fine size follows the long side.
+  Box<Dim> domain;
+  domain.hi[0] = 3.0;
+  const double h = 3.0 * std::ldexp(1.0, -fine);
+  for (double band : {1.0, 4.0}) {
+    SCOPED_TRACE(::testing::Message() << "band " << band);
+    Vec<Dim> centre = Vec<Dim>::Constant(0.5);
+    centre[0] = 1.5;
+    auto dense = tree::narrow_band<Dim>(domain, sphere<Dim>(centre, 0.3), coarse, fine, band);
+    auto sparse = dense;
+    tree::NarrowBandTracker<Dim> tracker(sparse, coarse, fine, band);
+    std::vector<Mark> marks;
+    MarkList list;
+    tracker.mark(sparse, sphere<Dim>(centre, 0.3), list);
+    for (int step = 0; step < 8; ++step) {
+      centre[Dim - 1] += h;  // across the short side
+      const auto phi = sphere<Dim>(centre, 0.3);
+      tree::mark_narrow_band<Dim>(dense, phi, coarse, fine, band, marks);
+      tracker.mark(sparse, phi, list);
+      const MarkList want = as_list(marks, dense.cell_capacity());
+      std::sort(list.split.begin(), list.split.end());
+      std::sort(list.merge.begin(), list.merge.end());
+      ASSERT_EQ(list.split, want.split) << "step " << step;
+      ASSERT_EQ(list.merge, want.merge) << "step " << step;
+      dense.adapt(marks);
+      tracker.update(sparse, sparse.adapt(list));
+      ASSERT_EQ(leaf_set(dense), leaf_set(sparse)) << "step " << step;
+    }
+  }
+}
+
+TEST(MarkList, ADeadIdReusedDuringTheChangeIsNotSplit) {
+  // Id 3 dies (split) and goes to the free list; splitting 0 hands it to a new child; the stale
+  // mark on 3 must not split that child, as the dense form of the same marks would not.
+  auto g = tree::uniform<2>(Box<2>{}, 2);
+  g.split(3);
+  MarkList marks;
+  marks.split = {0, 3};
+  const AdaptReport r = g.adapt(marks);
+  EXPECT_EQ(r.n_split, 1);
+  EXPECT_EQ(g.deepest_level(), 3);
+  EXPECT_TRUE(g.check_invariants().ok());
 }
 
 TEST(MarkList, AdaptIgnoresRepeatsAndDeadIdsAndNeedsWholeGroups) {
