@@ -74,6 +74,7 @@ int main(int argc, char** argv) {
 
   std::string case_name, json_path, md_path, levels, solver, stencil, rows, trees_dir;
   int max_jump = -1, rbf_exponent = -1, rbf_degree = -1, gradient_degree = -1;
+  double stencil_growth = -1.0;
   bool full = false;
   auto* run = app.add_subcommand("run", "run one case and print its tables");
   run->add_option("case", case_name, "case name (see list)")->required();
@@ -86,6 +87,8 @@ int main(int argc, char** argv) {
   run->add_option("--rbf-exponent", rbf_exponent, "PHS exponent s (odd, 1-9) of the RBF-FD Laplacian rows");
   run->add_option("--rbf-degree", rbf_degree, "polynomial degree (0-4) of the RBF-FD Laplacian rows");
   run->add_option("--gradient-degree", gradient_degree, "polynomial degree (0-4) of RBF-FD face gradients");
+  run->add_option("--stencil-growth", stencil_growth,
+                  "irregular RBF-FD stencils grow to G x (polynomial terms) + 1 nodes (default 2, 1-8)");
   run->add_option("--rows", rows,
                   "Poisson studies: rebuild each row's tree by its rule (default), or refine the first "
                   "row's tree uniformly (the paper's recursive subdivision)")
@@ -156,6 +159,7 @@ int main(int argc, char** argv) {
       if (rbf_exponent >= 0) options.rbf_exponent = rbf_exponent;
       if (rbf_degree >= 0) options.rbf_degree = rbf_degree;
       if (gradient_degree >= 0) options.gradient_degree = gradient_degree;
+      if (stencil_growth != -1.0) options.stencil_growth = stencil_growth;
       if (!trees_dir.empty()) {
         LIQUID_VERIFY(info->writes_trees, "--trees: case '{}' writes no trees (cellgraph-invariants does)",
                       case_name);

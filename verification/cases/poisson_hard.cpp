@@ -80,7 +80,8 @@ CaseResult run(const CaseOptions& options) {
         std::pair{options.stencil.has_value(), "--stencil"}, std::pair{options.rows.has_value(), "--rows"},
         std::pair{options.rbf_exponent.has_value(), "--rbf-exponent"},
         std::pair{options.rbf_degree.has_value(), "--rbf-degree"},
-        std::pair{options.gradient_degree.has_value(), "--gradient-degree"}})
+        std::pair{options.gradient_degree.has_value(), "--gradient-degree"},
+        std::pair{options.stencil_growth.has_value(), "--stencil-growth"}})
     LIQUID_VERIFY(!given,
                   "poisson-hard does not take {}: its scenarios fix their own trees, jumps and "
                   "scheme (only --levels A:B sets the base level A)",

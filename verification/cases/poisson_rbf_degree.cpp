@@ -92,7 +92,8 @@ CaseResult run(const CaseOptions& options) {
         std::pair{options.stencil.has_value(), "--stencil"},
         std::pair{options.perturb.has_value(), "--perturb"},
         std::pair{options.rbf_exponent.has_value(), "--rbf-exponent"},
-        std::pair{options.gradient_degree.has_value(), "--gradient-degree"}})
+        std::pair{options.gradient_degree.has_value(), "--gradient-degree"},
+        std::pair{options.stencil_growth.has_value(), "--stencil-growth"}})
     LIQUID_VERIFY(!given, "poisson-rbf-degree: {} is not an option of this case (it fixes its own studies)",
                   name);
   CaseResult result;

@@ -23,6 +23,7 @@ struct CaseOptions {
   std::optional<int> rbf_exponent;          ///< --rbf-exponent S: PHS r^S of the RBF-FD Laplacian rows
   std::optional<int> rbf_degree;            ///< --rbf-degree M: their polynomial degree
   std::optional<int> gradient_degree;       ///< --gradient-degree M: degree of RBF-FD face gradients
+  std::optional<double> stencil_growth;     ///< --stencil-growth G: RBF-FD stencils of G x terms + 1 nodes
   std::optional<std::string> rows;          ///< --rows rebuild|refine: how later rows' trees are made
   std::optional<std::string> trees_dir;     ///< --trees DIR: write the trees checked (HDF5 + XDMF)
   bool full = false;                        ///< the full suite's extent rather than the quick one

@@ -136,6 +136,11 @@ CaseResult run_poisson_study(PoissonStudy<Dim> study, const CaseOptions& options
     LIQUID_VERIFY(*given >= 0 && *given <= 4, "{} must be in 0..4, got {}", flag, *given);
     *target = *given;
   }
+  if (options.stencil_growth) {
+    LIQUID_VERIFY(*options.stencil_growth >= 1.0 && *options.stencil_growth <= 8.0,
+                  "--stencil-growth must be in 1..8, got {}", *options.stencil_growth);
+    study.discretisation.growth = *options.stencil_growth;
+  }
   if (options.rows) {
     LIQUID_VERIFY(*options.rows == "rebuild" || *options.rows == "refine",
                   "--rows: choose rebuild or refine, got '{}'", *options.rows);
@@ -229,10 +234,11 @@ CaseResult run_poisson_study(PoissonStudy<Dim> study, const CaseOptions& options
   result.notes.push_back(fmt::format(
       "observed orders (least-squares against h): p {:.2f}, dp/dn {:.2f}; against unknowns (-{} "
       "d log e / d log N): "
-      "{:.2f}; solver {}, tolerance {:.0e}; stencil rule {}, PHS r^{} + degree {}; rows {}",
+      "{:.2f}; solver {}, tolerance {:.0e}; stencil rule {} (growth {:g}), PHS r^{} + degree {}; rows {}",
       order, order_grad, Dim, order_dofs, linalg::to_string(study.solver.kind), study.solver.tolerance,
-      mac::to_string(study.discretisation.rule), study.discretisation.rbf.exponent,
-      study.discretisation.rbf.degree, study.self_similar ? "refine the first tree" : "rebuilt per level"));
+      mac::to_string(study.discretisation.rule), study.discretisation.growth,
+      study.discretisation.rbf.exponent, study.discretisation.rbf.degree,
+      study.self_similar ? "refine the first tree" : "rebuilt per level"));
   Json series = Json::array();
   series.push(series_entry("L-inf error of p", "adaptive", hs, ep));
   series.push(series_entry("L-inf error of dp/dn", "adaptive", hs, eg));
