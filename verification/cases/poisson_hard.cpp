@@ -73,19 +73,9 @@ struct Scenario {
 
 CaseResult run(const CaseOptions& options) {
   // The scenarios fix their own jumps, solver and scheme; an option they would ignore is refused.
-  for (const auto& [given, flag] :
-       {std::pair{options.perturb.has_value(), "--perturb"},
-        std::pair{options.solver.has_value(), "--solver"},
-        std::pair{options.max_jump.has_value(), "--max-jump"},
-        std::pair{options.stencil.has_value(), "--stencil"}, std::pair{options.rows.has_value(), "--rows"},
-        std::pair{options.rbf_exponent.has_value(), "--rbf-exponent"},
-        std::pair{options.rbf_degree.has_value(), "--rbf-degree"},
-        std::pair{options.gradient_degree.has_value(), "--gradient-degree"},
-        std::pair{options.stencil_growth.has_value(), "--stencil-growth"}})
-    LIQUID_VERIFY(!given,
-                  "poisson-hard does not take {}: its scenarios fix their own trees, jumps and "
-                  "scheme (only --levels A:B sets the base level A)",
-                  flag);
+  refuse_study_options(
+      options, "poisson-hard",
+      "its scenarios fix their own trees, jumps and scheme (only --levels A:B sets the base level A)");
   const int L = options.level_min.value_or(options.full ? 6 : 5);
   const Box<2> square{Vec<2>::Zero(), Vec<2>::Constant(pi)};
   std::vector<Scenario> scenarios;

@@ -70,20 +70,13 @@ void compare_rules(int level_min, int level_max, Table& table, CaseResult& resul
   for (const auto rule : {mac::StencilRule::nearest, mac::StencilRule::face_grown, mac::StencilRule::ring}) {
     PoissonStudy<Dim> s = neumann_study<Dim>(false);
     s.discretisation.rule = rule;
-    CellGraphOptions<Dim> o;
-    o.max_jump = s.max_jump;
+    s.level_min = level_min, s.level_max = level_max;
+    const auto runs = solve_rows<Dim>(s, result, fmt::format("{}D {}", Dim, mac::to_string(rule)));
+    if (runs.empty()) continue;
     std::vector<double> hs, ep, eg;
-    double assembly = 0.0;
-    long rbf_rows = 0, unknowns = 0;
-    s.level_min = level_min;
-    const CellGraph<Dim> first = s.make_tree(level_min, o);
-    for (int level = level_min; level <= level_max; ++level) {
-      const PoissonRun run = solve_poisson<Dim>(row_tree<Dim>(s, first, level, o), s);
-      result.expect(run.solve.converged(),
-                    fmt::format("{}D {}: {}", Dim, mac::to_string(rule), run.solve.describe()));
-      hs.push_back(run.h), ep.push_back(run.err_p), eg.push_back(run.err_grad);
-      assembly = run.assembly_seconds, rbf_rows = run.assembly.n_rbf_rows, unknowns = run.n_unknowns;
-    }
+    for (const auto& r : runs) hs.push_back(r.h), ep.push_back(r.err_p), eg.push_back(r.err_grad);
+    const double assembly = runs.back().assembly_seconds;
+    const long rbf_rows = runs.back().assembly.n_rbf_rows, unknowns = runs.back().n_unknowns;
     const std::string key = fmt::format("{}D {}", Dim, mac::to_string(rule));
     result.gate.push_back({key + " finest err p", GateFigure::Kind::error, ep.back()});
     result.gate.push_back({key + " finest err dp/dn", GateFigure::Kind::error, eg.back()});

@@ -49,20 +49,16 @@ void compare(const Setting& setting, const CaseOptions& options, Table& table, C
     const int level_min = options.full ? setting.full_min : setting.quick_min;
     const int level_max = options.full ? setting.full_max : setting.quick_max;
     const bool asserted = options.full ? setting.asserted_full : setting.asserted_quick;
-    s.level_min = level_min;  // row_tree refines the first tree by (level - level_min)
-    CellGraphOptions<Dim> o;
-    o.max_jump = s.max_jump;
-    const CellGraph<Dim> first = s.make_tree(level_min, o);
+    s.level_min = level_min, s.level_max = level_max;
+    const auto runs = solve_rows<Dim>(s, result, fmt::format("{} degree {}", setting.name, degree));
+    if (runs.empty()) continue;
     std::vector<double> hs, ep, eg;
-    PoissonRun last;
     int jump = 0;
-    for (int level = level_min; level <= level_max; ++level) {
-      last = solve_poisson<Dim>(row_tree<Dim>(s, first, level, o), s);
-      result.expect(last.solve.converged(), fmt::format("{} degree {} level {}: {}", setting.name, degree,
-                                                        level, last.solve.describe()));
-      hs.push_back(last.h), ep.push_back(last.err_p), eg.push_back(last.err_grad);
-      jump = std::max(jump, last.max_level_jump);
+    for (const auto& r : runs) {
+      hs.push_back(r.h), ep.push_back(r.err_p), eg.push_back(r.err_grad);
+      jump = std::max(jump, r.max_level_jump);
     }
+    const PoissonRun& last = runs.back();
     const double order_p = fit_order(hs, ep), order_g = fit_order(hs, eg);
     table.add_row({std::string(setting.name), long{degree}, fmt::format("{}:{}", level_min, level_max),
                    last.n_unknowns, long{jump}, ep.back(), order_p, eg.back(), order_g, last.assembly_seconds,
@@ -84,18 +80,7 @@ void compare(const Setting& setting, const CaseOptions& options, Table& table, C
 }
 
 CaseResult run(const CaseOptions& options) {
-  for (const auto& [given, name] :
-       {std::pair{options.level_min.has_value(), "--levels"}, std::pair{options.rows.has_value(), "--rows"},
-        std::pair{options.rbf_degree.has_value(), "--rbf-degree"},
-        std::pair{options.max_jump.has_value(), "--max-jump"},
-        std::pair{options.solver.has_value(), "--solver"},
-        std::pair{options.stencil.has_value(), "--stencil"},
-        std::pair{options.perturb.has_value(), "--perturb"},
-        std::pair{options.rbf_exponent.has_value(), "--rbf-exponent"},
-        std::pair{options.gradient_degree.has_value(), "--gradient-degree"},
-        std::pair{options.stencil_growth.has_value(), "--stencil-growth"}})
-    LIQUID_VERIFY(!given, "poisson-rbf-degree: {} is not an option of this case (it fixes its own studies)",
-                  name);
+  refuse_study_options(options, "poisson-rbf-degree", "it fixes its own studies, levels and degrees", true);
   CaseResult result;
   Table table(
       "RBF-FD Laplacian rows with polynomials of degree 2 and 3, rows by recursive subdivision "

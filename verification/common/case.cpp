@@ -1,10 +1,26 @@
 #include "case.hpp"
 
 #include <algorithm>
+#include <utility>
 
 #include "liquid/core/error.hpp"
 
 namespace liquid::verification {
+
+void refuse_study_options(const CaseOptions& options, const std::string& case_name, const std::string& why,
+                          bool levels_too) {
+  for (const auto& [given, flag] :
+       {std::pair{options.perturb.has_value(), "--perturb"},
+        std::pair{options.solver.has_value(), "--solver"},
+        std::pair{options.max_jump.has_value(), "--max-jump"},
+        std::pair{options.stencil.has_value(), "--stencil"}, std::pair{options.rows.has_value(), "--rows"},
+        std::pair{options.rbf_exponent.has_value(), "--rbf-exponent"},
+        std::pair{options.rbf_degree.has_value(), "--rbf-degree"},
+        std::pair{options.gradient_degree.has_value(), "--gradient-degree"},
+        std::pair{options.stencil_growth.has_value(), "--stencil-growth"},
+        std::pair{levels_too && options.level_min.has_value(), "--levels"}})
+    LIQUID_VERIFY(!given, "{} does not take {}: {}", case_name, flag, why);
+}
 
 std::vector<CaseInfo>& case_registry() {
   static std::vector<CaseInfo> cases;

@@ -62,6 +62,12 @@ struct CaseInfo {
   bool writes_trees = false;  ///< honours CaseOptions::trees_dir
 };
 
+/// For a case that fixes its own scheme: throws, naming the first study option given (--perturb,
+/// --solver, --max-jump, --stencil, --rows, --rbf-exponent, --rbf-degree, --gradient-degree,
+/// --stencil-growth, and --levels when `levels_too`), as "<case> does not take <flag>: <why>".
+void refuse_study_options(const CaseOptions& options, const std::string& case_name, const std::string& why,
+                          bool levels_too = false);
+
 /// All registered cases, in name order.
 std::vector<CaseInfo>& case_registry();
 const CaseInfo* find_case(const std::string& name);

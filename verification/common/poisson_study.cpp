@@ -258,6 +258,24 @@ CaseResult run_poisson_study(PoissonStudy<Dim> study, const CaseOptions& options
   return result;
 }
 
+template <int Dim>
+std::vector<PoissonRun> solve_rows(const PoissonStudy<Dim>& study, CaseResult& result,
+                                   const std::string& label) {
+  CellGraphOptions<Dim> options;
+  options.max_jump = study.max_jump;
+  const CellGraph<Dim> first = study.make_tree(study.level_min, options);
+  std::vector<PoissonRun> runs;
+  for (int level = study.level_min; level <= study.level_max; ++level) {
+    PoissonRun run = solve_poisson<Dim>(row_tree<Dim>(study, first, level, options), study);
+    result.expect(run.solve.converged(), fmt::format("{} level {}: {}", label, level, run.solve.describe()));
+    if (!run.solve.converged()) break;
+    runs.push_back(std::move(run));
+  }
+  return runs;
+}
+
+template std::vector<PoissonRun> solve_rows<2>(const PoissonStudy<2>&, CaseResult&, const std::string&);
+template std::vector<PoissonRun> solve_rows<3>(const PoissonStudy<3>&, CaseResult&, const std::string&);
 template CellGraph<2> row_tree<2>(const PoissonStudy<2>&, const CellGraph<2>&, int,
                                   const CellGraphOptions<2>&);
 template CellGraph<3> row_tree<3>(const PoissonStudy<3>&, const CellGraph<3>&, int,

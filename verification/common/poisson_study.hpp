@@ -67,6 +67,13 @@ struct PoissonRun {
   std::string worst_grad;  ///< where the L-inf of dp/dn is reached: face centre, side levels, FD or RBF-FD
 };
 
+/// The rows of `study` at base levels level_min..level_max (trees by row_tree, jumps up to
+/// study.max_jump), solved in order. A row whose solver does not converge is recorded in `result`
+/// under `label` and ends the series.
+template <int Dim>
+std::vector<PoissonRun> solve_rows(const PoissonStudy<Dim>& study, CaseResult& result,
+                                   const std::string& label);
+
 template <int Dim>
 PoissonRun solve_poisson(const CellGraph<Dim>& graph, const PoissonStudy<Dim>& study);
 

@@ -43,22 +43,9 @@ void mark_narrow_band(const CellGraph<Dim>& graph, const LevelSet<Dim>& phi, int
     for (long i = 0; i < n; ++i) {
       const CellId c = cells[i];
       if (!graph.alive(c)) continue;
-      const TreeNode<Dim> node{graph.level(c), graph.address(c), graph.box(c)};
-      if (narrow_band_refines(node, phi, coarse_level, fine_level, band, h)) {
-        split[t].push_back(c);
-        continue;
-      }
-      if (node.level == 0) continue;
-      TreeNode<Dim> parent;
-      parent.level = node.level - 1;
-      parent.address = node.address;
-      for (int d = 0; d < Dim; ++d) {
-        parent.address[d] >>= 1;
-        const double s = 2.0 * graph.cell_size(c)[d];
-        parent.box.lo[d] = graph.domain().lo[d] + static_cast<double>(parent.address[d]) * s;
-        parent.box.hi[d] = parent.box.lo[d] + s;
-      }
-      if (!narrow_band_refines(parent, phi, coarse_level, fine_level, band, h)) merge[t].push_back(c);
+      const Mark m = narrow_band_mark<Dim>(graph, c, phi, coarse_level, fine_level, band, h);
+      if (m == Mark::split) split[t].push_back(c);
+      if (m == Mark::merge) merge[t].push_back(c);
     }
   }
   concat(split, marks.split);

@@ -82,6 +82,25 @@ CellGraph<Dim> narrow_band(const Box<Dim>& domain, const LevelSet<Dim>& phi, int
 }
 
 template <int Dim>
+Mark narrow_band_mark(const CellGraph<Dim>& graph, CellId c, const LevelSet<Dim>& phi, int coarse_level,
+                      int fine_level, double band, double fine_size) {
+  const TreeNode<Dim> node{graph.level(c), graph.address(c), graph.box(c)};
+  if (narrow_band_refines(node, phi, coarse_level, fine_level, band, fine_size)) return Mark::split;
+  if (node.level == 0) return Mark::keep;
+  TreeNode<Dim> parent;
+  parent.level = node.level - 1;
+  parent.address = node.address;
+  for (int d = 0; d < Dim; ++d) {
+    parent.address[d] >>= 1;
+    const double s = 2.0 * graph.cell_size(c)[d];
+    parent.box.lo[d] = graph.domain().lo[d] + static_cast<double>(parent.address[d]) * s;
+    parent.box.hi[d] = parent.box.lo[d] + s;
+  }
+  return narrow_band_refines(parent, phi, coarse_level, fine_level, band, fine_size) ? Mark::keep
+                                                                                     : Mark::merge;
+}
+
+template <int Dim>
 void mark_narrow_band(const CellGraph<Dim>& graph, const LevelSet<Dim>& phi, int coarse_level, int fine_level,
                       double band, std::vector<Mark>& marks) {
   check_levels<Dim>(coarse_level, fine_level, "mark_narrow_band");
@@ -91,23 +110,7 @@ void mark_narrow_band(const CellGraph<Dim>& graph, const LevelSet<Dim>& phi, int
 #pragma omp parallel for schedule(static) if (n > detail::parallel_min)
   for (long i = 0; i < n; ++i) {
     const auto c = static_cast<CellId>(i);
-    if (!graph.alive(c)) continue;
-    TreeNode<Dim> node{graph.level(c), graph.address(c), graph.box(c)};
-    if (narrow_band_refines(node, phi, coarse_level, fine_level, band, h)) {
-      marks[c] = Mark::split;
-      continue;
-    }
-    if (node.level == 0) continue;
-    TreeNode<Dim> parent;
-    parent.level = node.level - 1;
-    parent.address = node.address;
-    for (int d = 0; d < Dim; ++d) {
-      parent.address[d] >>= 1;
-      const double s = 2.0 * graph.cell_size(c)[d];
-      parent.box.lo[d] = graph.domain().lo[d] + static_cast<double>(parent.address[d]) * s;
-      parent.box.hi[d] = parent.box.lo[d] + s;
-    }
-    if (!narrow_band_refines(parent, phi, coarse_level, fine_level, band, h)) marks[c] = Mark::merge;
+    if (graph.alive(c)) marks[c] = narrow_band_mark<Dim>(graph, c, phi, coarse_level, fine_level, band, h);
   }
 }
 
@@ -153,6 +156,8 @@ CellGraph<Dim> random(const Box<Dim>& domain, std::uint64_t seed, int min_level,
   template CellGraph<D> banded<D>(const Box<D>&, const LevelSet<D>&, int, double,                         \
                                   const CellGraphOptions<D>&);                                            \
   template bool narrow_band_refines<D>(const TreeNode<D>&, const LevelSet<D>&, int, int, double, double); \
+  template Mark narrow_band_mark<D>(const CellGraph<D>&, CellId, const LevelSet<D>&, int, int, double,    \
+                                    double);                                                              \
   template CellGraph<D> narrow_band<D>(const Box<D>&, const LevelSet<D>&, int, int, double,               \
                                        const CellGraphOptions<D>&);                                       \
   template void mark_narrow_band<D>(const CellGraph<D>&, const LevelSet<D>&, int, int, double,            \

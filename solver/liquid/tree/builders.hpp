@@ -39,6 +39,12 @@ template <int Dim>
 bool narrow_band_refines(const TreeNode<Dim>& node, const LevelSet<Dim>& phi, int coarse_level,
                          int fine_level, double band, double fine_size);
 
+/// What the narrow-band rule asks of leaf c: split when it refines c, merge when it would not
+/// refine c's parent, else keep (fine_size: the cell size at fine_level along the longest axis).
+template <int Dim>
+Mark narrow_band_mark(const CellGraph<Dim>& graph, CellId c, const LevelSet<Dim>& phi, int coarse_level,
+                      int fine_level, double band, double fine_size);
+
 /// Marks an existing graph towards narrow_band(phi, coarse_level, fine_level, band): split where
 /// the rule refines a leaf, merge where it would not refine the leaf's parent. Visits every cell;
 /// `marks` (out) is resized to graph.cell_capacity() and reset first. Uses OpenMP. To re-adapt at

@@ -194,3 +194,54 @@ TEST(Poisson, DirichletWallsQuadraticIsExact3D) {
 
 }  // namespace
 }  // namespace liquid::mac
+
+namespace liquid::mac {
+namespace {
+
+// Sharing weights between congruent stencils changes nothing but round-off: the matrix, the
+// right-hand side and the face gradients match the uncached assembly, on a band around a plane
+// (T-junction layouts repeat, so the cache is used) and on a level-set problem (interface
+// crossings bypass it).
+template <int Dim>
+void check_cache_changes_nothing(const PoissonProblem<Dim>& problem, const CellGraph<Dim>& graph,
+                                 bool expect_hits) {
+  PoissonOptions on, off;
+  off.cache_weights = false;
+  const PoissonSystem<Dim> a = assemble_poisson<Dim>(graph, problem, on);
+  const PoissonSystem<Dim> b = assemble_poisson<Dim>(graph, problem, off);
+  ASSERT_EQ(a.n_unknowns(), b.n_unknowns());
+  EXPECT_EQ(b.stats.n_cache_hits, 0);
+  if (expect_hits) {
+    EXPECT_GT(a.stats.n_cache_hits, a.stats.n_rbf_rows / 4);  // 37% here: walls break the repetition
+  }
+  const double scale = b.A.cwiseAbs().sum() / b.A.nonZeros();
+  EXPECT_LT((a.A - b.A).cwiseAbs().sum() / a.A.nonZeros(), 1e-10 * scale);
+  EXPECT_LT((a.b - b.b).cwiseAbs().maxCoeff(), 1e-10 * (1.0 + b.b.cwiseAbs().maxCoeff()));
+  linalg::Vector p(a.n_unknowns());
+  for (long i = 0; i < a.n_unknowns(); ++i) p[i] = quad<Dim>(graph.centre(a.layout.cell_of_dof[i]));
+  const auto ga = face_normal_derivative<Dim>(graph, a, on, p);
+  const auto gb = face_normal_derivative<Dim>(graph, b, off, p);
+  double worst = 0.0;
+  for (std::size_t f = 0; f < ga.size(); ++f)
+    if (std::isfinite(gb[f])) worst = std::max(worst, std::abs(ga[f] - gb[f]));
+  EXPECT_LT(worst, 1e-9);
+}
+
+TEST(Poisson, WeightCacheChangesOnlyRoundOff) {
+  PoissonProblem<3> neumann;
+  neumann.f = quad_laplacian<3>;
+  neumann.pin_value = quad<3>;
+  const Box<3> box{Vec<3>::Constant(-2.0), Vec<3>::Constant(2.0)};
+  const auto plane = tree::narrow_band<3>(
+      box, [](const Vec<3>& x) { return x[2] - 0.3; }, 2, 4, 2.0);
+  check_cache_changes_nothing<3>(neumann, plane, true);
+
+  PoissonProblem<2> dirichlet;
+  dirichlet.f = quad_laplacian<2>;
+  dirichlet.levelset = levelset::sphere<2>(Vec<2>::Zero(), 1.3);
+  dirichlet.dirichlet = quad<2>;
+  check_cache_changes_nothing<2>(dirichlet, non_graded<2>(3, 2.0), false);
+}
+
+}  // namespace
+}  // namespace liquid::mac
