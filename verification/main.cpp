@@ -90,8 +90,8 @@ int main(int argc, char** argv) {
   run->add_option("--stencil-growth", stencil_growth,
                   "irregular RBF-FD stencils grow to G x (polynomial terms) + 1 nodes (default 2, 1-8)");
   run->add_option("--rows", rows,
-                  "Poisson studies: rebuild each row's tree by its rule (default), or refine the first "
-                  "row's tree uniformly (the paper's recursive subdivision)")
+                  "Poisson studies: refine the first row's tree uniformly (the paper's recursive "
+                  "subdivision, the default), or rebuild each row's tree by its rule")
       ->check(CLI::IsMember({"rebuild", "refine"}));
   run->add_option("--trees", trees_dir,
                   "write the trees the case checks to DIR as HDF5 + XDMF (ParaView); cellgraph-invariants");

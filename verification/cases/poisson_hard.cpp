@@ -12,8 +12,8 @@
 //     tree's coarsest level.
 // Expected: nothing throws, no NaN, every solve converges, and the L-inf error of p stays within a
 // factor 4 of its reference row. The table reports the worst estimated condition number of the
-// scaled RBF-FD systems and what the engine did: rows whose stencil could not carry degree 2
-// (lowered), rows that needed a node dropped (retried), centres within 1e-3 h of the interface.
+// scaled RBF-FD systems and what the engine did: rows whose stencil could not carry the requested
+// degree (lowered), rows that needed a node dropped (retried), centres within 1e-3 h of the interface.
 
 #include <cmath>
 #include <numbers>
@@ -157,11 +157,10 @@ CaseResult run(const CaseOptions& options) {
   result.fields.set("worst_condition", worst_condition);
   result.notes.push_back(
       fmt::format("worst estimated condition number of a scaled RBF-FD system: {:.2e}; lowered = rows whose "
-                  "stencil could not "
-                  "carry degree 2, so the engine used a lower degree; retried = rows whose system was "
-                  "refused (coincident or "
-                  "singular) and solved again without the offending node; expected error factor at most {}",
-                  worst_condition, kFactor));
+                  "stencil could not carry the requested degree ({}), so the engine used a lower one; "
+                  "retried = rows whose system was refused (coincident or singular) and solved again "
+                  "without the offending node; expected error factor at most {}",
+                  worst_condition, mac::PoissonOptions{}.rbf.degree, kFactor));
   return result;
 }
 

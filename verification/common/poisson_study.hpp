@@ -32,7 +32,7 @@ struct PoissonStudy {
   /// true (--rows refine): only the first row calls make_tree; every later row is that tree with
   /// each leaf split once more (the paper's recursive subdivision), so the refined regions and the
   /// T-junctions stay where they are and each row is a true refinement of the one before.
-  bool self_similar = false;
+  bool self_similar = false;         ///< the paper studies set it
   int level_min = 3, level_max = 5;  ///< base levels of the rows (CaseOptions::level_* override)
   int finest_offset = 2;             ///< finest level = base level + this
   int max_jump = 2;

@@ -25,12 +25,19 @@ namespace liquid::mac {
 
 enum class Nullspace { pin, zero_mean };
 
-// Face gradients use degree 3 by default: with degree 2 (an O(h^2) gradient stencil) the L-inf of
-// dp/dn at hanging faces next to a Dirichlet interface converged at about 1.7 on the 2D level-set
-// case; degree 3 gave 1.9-2.0 and 5-10 times smaller errors, the maximum moving to plain FD faces.
+// Polynomial degrees. The paper uses degree 2 everywhere; both defaults here are 3, as measured:
+//   - Laplacian rows: degree m reproduces polynomials of degree m, so the truncation error of a
+//     second derivative is O(h^(m-1)). Degree 2 leaves O(h) on the layer of T-junction rows. p still
+//     converges at second order, but that layer's error shows in dp/dn: with rows made by
+//     subdivision, dp/dn converged at 1.75 (2D Neumann, worst faces the hanging faces at the layer)
+//     and 1.18 (3D Neumann), and 3D Dirichlet missed in p too (1.49). Degree 3 gave 1.9-2.3 on all
+//     four paper studies (case poisson-rbf-degree runs both side by side).
+//   - Face gradients: with degree 2 (an O(h^2) gradient stencil) the L-inf of dp/dn at hanging
+//     faces next to a Dirichlet interface converged at about 1.7 on the 2D level-set case; degree 3
+//     gave 1.9-2.0 and 5-10 times smaller errors, the maximum moving to plain FD faces.
 struct PoissonOptions {
-  rbf::Config rbf{3, 2};                 ///< kernel and polynomial degree of the RBF-FD Laplacian rows
-  int gradient_degree = 3;               ///< polynomial degree of RBF-FD face gradients (see the note)
+  rbf::Config rbf{3, 3};                 ///< kernel and polynomial degree of the RBF-FD Laplacian rows
+  int gradient_degree = 3;               ///< polynomial degree of RBF-FD face gradients (see above)
   StencilRule rule = StencilRule::ring;  ///< how irregular stencils are chosen (ring: best L-inf measured)
   double growth = 2.0;                   ///< irregular stencils get growth * (polynomial terms) + 1 nodes
   bool regular_fd = true;                ///< plain FD where the neighbourhood is regular
