@@ -72,7 +72,8 @@ int main(int argc, char** argv) {
 
   auto* list = app.add_subcommand("list", "list the verification cases");
 
-  std::string case_name, json_path, md_path, levels, solver, stencil, rows, trees_dir;
+  std::string case_name, json_path, md_path, levels, solver, stencil, rows, trees_dir, nullspace;
+  double tolerance = -1.0;
   int max_jump = -1, rbf_exponent = -1, rbf_degree = -1, gradient_degree = -1;
   double stencil_growth = -1.0;
   bool full = false;
@@ -93,6 +94,12 @@ int main(int argc, char** argv) {
                   "Poisson studies: refine the first row's tree uniformly (the paper's recursive "
                   "subdivision, the default), or rebuild each row's tree by its rule")
       ->check(CLI::IsMember({"rebuild", "refine"}));
+  run->add_option("--nullspace", nullspace,
+                  "pure Neumann Poisson studies: pin one unknown near the centre to the exact value (the "
+                  "paper's way, the default) or constrain the mean to zero")
+      ->check(CLI::IsMember({"pin", "zero-mean"}));
+  run->add_option("--tolerance", tolerance, "relative residual the linear solver must reach (default 1e-10)")
+      ->check(CLI::Range(1e-16, 0.5));
   run->add_option("--trees", trees_dir,
                   "write the trees the case checks to DIR as HDF5 + XDMF (ParaView); cellgraph-invariants");
   run->add_flag("--full", full, "use the full suite's extent");
@@ -129,6 +136,14 @@ int main(int argc, char** argv) {
   poisson->add_option("--max-jump", user.max_jump, "largest level jump between neighbouring cells");
   poisson->add_option("--levels", user.levels, "base levels A:B of the rows");
   poisson->add_option("--solver", user.solver, "linear solver name");
+  poisson
+      ->add_option("--nullspace", user.nullspace,
+                   "Neumann walls without a level set: pin (default) or zero-mean")
+      ->check(CLI::IsMember({"pin", "zero-mean"}));
+  poisson
+      ->add_option("--tolerance", user.tolerance,
+                   "relative residual the linear solver must reach (default 1e-10)")
+      ->check(CLI::Range(1e-16, 0.5));
   poisson->add_option("--json", user_json, "write the result as JSON to FILE");
   poisson->add_option("--md", user_md, "write the result as Markdown to FILE");
 
@@ -155,6 +170,8 @@ int main(int argc, char** argv) {
       if (!solver.empty()) options.solver = solver;
       if (!stencil.empty()) options.stencil = stencil;
       if (!rows.empty()) options.rows = rows;
+      if (!nullspace.empty()) options.nullspace = nullspace;
+      if (tolerance > 0.0) options.tolerance = tolerance;
       if (!perturb.empty()) options.perturb = perturb;
       if (rbf_exponent >= 0) options.rbf_exponent = rbf_exponent;
       if (rbf_degree >= 0) options.rbf_degree = rbf_degree;

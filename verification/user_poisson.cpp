@@ -134,6 +134,8 @@ CaseResult run(const UserPoissonArgs& args) {
   }
 
   CaseOptions options;
+  if (!args.nullspace.empty()) options.nullspace = args.nullspace;
+  if (args.tolerance != 0.0) options.tolerance = args.tolerance;
   CaseResult result = run_poisson_study<Dim>(s, options);
   // The smallest errors measured must sit well above what the numerical derivatives could add:
   // an error e in f moves p by about e L^2 (L the domain's size); grad p is compared directly.
@@ -174,9 +176,10 @@ CaseResult run(const UserPoissonArgs& args) {
 std::string describe(const UserPoissonArgs& a) {
   return fmt::format(
       "liquid-verify poisson --dim {} --exact '{}'{} --domain {} --bc {} --tree {} --max-jump {} "
-      "--levels {} --solver {}",
+      "--levels {} --solver {}{}{}",
       a.dim, a.exact, a.levelset.empty() ? "" : " --levelset '" + a.levelset + "'", a.domain, a.bc, a.tree,
-      a.max_jump, a.levels, a.solver);
+      a.max_jump, a.levels, a.solver, a.nullspace.empty() ? "" : " --nullspace " + a.nullspace,
+      a.tolerance != 0.0 ? fmt::format(" --tolerance {:g}", a.tolerance) : "");
 }
 
 CaseResult run_user_poisson(const UserPoissonArgs& args) {

@@ -17,6 +17,8 @@ struct UserPoissonArgs {
   int max_jump = 2;
   std::string levels = "4:6";
   std::string solver = "bicgstab-ilut";
+  std::string nullspace;   ///< pin | zero-mean (Neumann walls, no level set); empty: pin
+  double tolerance = 0.0;  ///< the solver's relative residual; 0: the default 1e-10
 };
 
 /// Runs the study (tables printed by the caller). Throws liquid::Error naming the argument on bad

@@ -18,6 +18,8 @@ void refuse_study_options(const CaseOptions& options, const std::string& case_na
         std::pair{options.rbf_degree.has_value(), "--rbf-degree"},
         std::pair{options.gradient_degree.has_value(), "--gradient-degree"},
         std::pair{options.stencil_growth.has_value(), "--stencil-growth"},
+        std::pair{options.nullspace.has_value(), "--nullspace"},
+        std::pair{options.tolerance.has_value(), "--tolerance"},
         std::pair{levels_too && options.level_min.has_value(), "--levels"}})
     LIQUID_VERIFY(!given, "{} does not take {}: {}", case_name, flag, why);
 }

@@ -25,6 +25,8 @@ struct CaseOptions {
   std::optional<int> gradient_degree;       ///< --gradient-degree M: degree of RBF-FD face gradients
   std::optional<double> stencil_growth;     ///< --stencil-growth G: RBF-FD stencils of G x terms + 1 nodes
   std::optional<std::string> rows;          ///< --rows rebuild|refine: how later rows' trees are made
+  std::optional<std::string> nullspace;     ///< --nullspace pin|zero-mean: a pure Neumann system's fix
+  std::optional<double> tolerance;          ///< --tolerance T: the solver's relative residual
   std::optional<std::string> trees_dir;     ///< --trees DIR: write the trees checked (HDF5 + XDMF)
   bool full = false;                        ///< the full suite's extent rather than the quick one
 };
@@ -64,7 +66,8 @@ struct CaseInfo {
 
 /// For a case that fixes its own scheme: throws, naming the first study option given (--perturb,
 /// --solver, --max-jump, --stencil, --rows, --rbf-exponent, --rbf-degree, --gradient-degree,
-/// --stencil-growth, and --levels when `levels_too`), as "<case> does not take <flag>: <why>".
+/// --stencil-growth, --nullspace, --tolerance, and --levels when `levels_too`), as
+/// "<case> does not take <flag>: <why>".
 void refuse_study_options(const CaseOptions& options, const std::string& case_name, const std::string& why,
                           bool levels_too = false);
 

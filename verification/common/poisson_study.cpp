@@ -146,6 +146,21 @@ CaseResult run_poisson_study(PoissonStudy<Dim> study, const CaseOptions& options
                   "--rows: choose rebuild or refine, got '{}'", *options.rows);
     study.self_similar = *options.rows == "refine";
   }
+  if (options.nullspace) {
+    LIQUID_VERIFY(!study.levelset && !study.dirichlet_walls,
+                  "--nullspace applies to pure Neumann problems; this study has Dirichlet values{}, so "
+                  "its system is not singular",
+                  study.levelset ? " on a level set" : " on its walls");
+    LIQUID_VERIFY(*options.nullspace == "pin" || *options.nullspace == "zero-mean",
+                  "--nullspace: choose pin or zero-mean, got '{}'", *options.nullspace);
+    study.discretisation.nullspace =
+        *options.nullspace == "pin" ? mac::Nullspace::pin : mac::Nullspace::zero_mean;
+  }
+  if (options.tolerance) {
+    LIQUID_VERIFY(*options.tolerance > 0.0 && *options.tolerance < 1.0,
+                  "--tolerance must be in (0, 1), got {}", *options.tolerance);
+    study.solver.tolerance = *options.tolerance;
+  }
   if (options.perturb) {
     // A deliberately inconsistent scheme for showing that the gate catches regressions: degree-1
     // polynomials cannot reproduce the Laplacian of quadratics at T-junctions.
@@ -234,11 +249,15 @@ CaseResult run_poisson_study(PoissonStudy<Dim> study, const CaseOptions& options
   result.notes.push_back(fmt::format(
       "observed orders (least-squares against h): p {:.2f}, dp/dn {:.2f}; against unknowns (-{} "
       "d log e / d log N): "
-      "{:.2f}; solver {}, tolerance {:.0e}; stencil rule {} (growth {:g}), PHS r^{} + degree {}; rows {}",
+      "{:.2f}; solver {}, tolerance {:.0e}; stencil rule {} (growth {:g}), PHS r^{} + degree {}; rows {}{}",
       order, order_grad, Dim, order_dofs, linalg::to_string(study.solver.kind), study.solver.tolerance,
       mac::to_string(study.discretisation.rule), study.discretisation.growth,
       study.discretisation.rbf.exponent, study.discretisation.rbf.degree,
-      study.self_similar ? "refine the first tree" : "rebuilt per level"));
+      study.self_similar ? "refine the first tree" : "rebuilt per level",
+      study.levelset || study.dirichlet_walls ? ""
+      : study.discretisation.nullspace == mac::Nullspace::pin
+          ? "; singular Neumann system: one unknown pinned near the centre"
+          : "; singular Neumann system: zero mean (bordered)"));
   Json series = Json::array();
   series.push(series_entry("L-inf error of p", "adaptive", hs, ep));
   series.push(series_entry("L-inf error of dp/dn", "adaptive", hs, eg));
