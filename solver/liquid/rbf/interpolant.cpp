@@ -43,7 +43,7 @@ void Interpolant<Dim>::fit(const Eigen::MatrixXd& values) {
   LIQUID_VERIFY(values.allFinite(), "RBF interpolant given non-finite values");
   Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(n_nodes() + system_->n_terms, values.cols());
   rhs.topRows(n_nodes()) = values;
-  coefficients_ = system_->qr.solve(rhs);
+  coefficients_ = system_->solve(rhs);
 }
 
 template <int Dim>

@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include <fmt/format.h>
+#include <Eigen/QR>
 
 #include "liquid/core/error.hpp"
 #include "liquid/rbf/saddle.hpp"
@@ -92,12 +93,16 @@ SaddleSystem<Dim>::SaddleSystem(std::span<const Vec<Dim>> z, const Config& confi
     for (int j = 0; j < i; ++j) K(i, j) = K(j, i) = kernel.value((z[i] - z[j]).norm());
     for (int t = 0; t < n_terms; ++t) K(i, n_nodes + t) = K(n_nodes + t, i) = basis.value(t, z[i]);
   }
-  qr.compute(K);
-  const auto& R = qr.matrixR();
-  const double r_max = std::abs(R(0, 0));
-  const double r_min = std::abs(R(size - 1, size - 1));
-  status.condition = r_min > 0.0 ? r_max / r_min : std::numeric_limits<double>::infinity();
-  if (qr.rank() < size || !(status.condition <= config.max_condition)) {
+  const double norm = K.cwiseAbs().colwise().sum().maxCoeff();  // 1-norm
+  lu.compute(K);
+  matrix = std::move(K);
+  // A singular K leaves a zero pivot; the estimator then divides by zero, so test the pivots first.
+  const auto& U = lu.matrixLU();
+  double u_min = std::numeric_limits<double>::infinity();
+  for (int k = 0; k < size; ++k) u_min = std::min(u_min, std::abs(U(k, k)));
+  const double rcond = u_min > 1e-300 * norm ? lu.rcond() : 0.0;
+  status.condition = rcond > 0.0 ? 1.0 / rcond : std::numeric_limits<double>::infinity();
+  if (!(status.condition <= config.max_condition)) {
     status.info = Info::singular_system;
     return;
   }
@@ -168,7 +173,7 @@ BasisWeights<Dim> basis_weights(std::span<const Vec<Dim>> nodes, const Vec<Dim>&
     for (int k = 0; k < Dim; ++k) rhs(n + t, 1 + k) = system.basis.derivative(t, k, origin);
     rhs(n + t, Dim + 1) = system.basis.laplacian(t, origin);
   }
-  Eigen::Matrix<double, Eigen::Dynamic, Dim + 2> solution = system.qr.solve(rhs);
+  Eigen::Matrix<double, Eigen::Dynamic, Dim + 2> solution = system.solve(rhs);
   result.w = solution.topRows(n);
   result.w.template middleCols<Dim>(1) /= radius;
   result.w.col(Dim + 1) /= radius * radius;

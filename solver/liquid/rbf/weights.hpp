@@ -72,7 +72,7 @@ struct Status {
   int n_nodes = 0;
   int degree_requested = 0;
   int degree_used = -1;
-  double condition = 0.0;         ///< estimate |R_11 / R_kk| of the pivoted QR of the scaled system
+  double condition = 0.0;         ///< 1-norm condition estimate (LU, Hager-Higham) of the scaled system
   bool laplacian_defined = true;  ///< false for s = 1 with a node on the evaluation point
   int node_a = -1, node_b = -1;   ///< the offending pair for coincident_nodes
 

@@ -4,9 +4,12 @@
 #include <cmath>
 #include <limits>
 
+#include <Eigen/SVD>
+
 #include "../../../verification/common/stencils.hpp"
 #include "liquid/core/error.hpp"
 #include "liquid/rbf/polynomial.hpp"
+#include "liquid/rbf/saddle.hpp"
 #include "liquid/rbf/weights.hpp"
 
 namespace liquid::rbf {
@@ -141,6 +144,43 @@ TEST(RbfFdWeights, PhsOneRefusesLaplacianAtANode) {
   std::vector<double> w;
   EXPECT_FALSE(weights<2>(nodes, Vec<2>::Zero(), Operator<2>::lap(), Config{1, 1}, w).usable());
   EXPECT_TRUE(weights<2>(nodes, Vec<2>::Zero(), Operator<2>::partial(1), Config{1, 1}, w).usable());
+}
+
+}  // namespace
+}  // namespace liquid::rbf
+
+namespace liquid::rbf {
+namespace {
+
+// The saddle system's condition estimate (LU, 1-norm) tracks the true 2-norm condition number
+// within the factor n that separates the two norms, and a system past Config::max_condition is
+// refused: a pair of nodes 1e-7 R apart (above the coincidence test) makes K nearly singular.
+TEST(RbfFdWeights, ConditionEstimateTracksTheTrueOneAndRefusesNearSingularSystems) {
+  for (int m : {1, 2, 3}) {
+    auto nodes = verification::jittered_stencil<2>(3, 0.1, 0.3, 11u + m);
+    std::vector<Vec<2>> unit(nodes.size());
+    double radius = 0.0;
+    for (const auto& x : nodes) radius = std::max(radius, x.norm());
+    for (std::size_t j = 0; j < nodes.size(); ++j) unit[j] = nodes[j] / radius;
+    const detail::SaddleSystem<2> system(unit, Config{3, m});
+    ASSERT_TRUE(system.status.usable()) << system.status.describe();
+    Eigen::JacobiSVD<Eigen::MatrixXd> svd(system.matrix);
+    const auto& s = svd.singularValues();
+    const double exact = s(0) / s(s.size() - 1);
+    const double n = static_cast<double>(system.matrix.rows());
+    EXPECT_GT(system.status.condition, exact / n) << "degree " << m;
+    EXPECT_LT(system.status.condition, exact * n) << "degree " << m;
+
+    nodes.push_back(nodes[3] + Vec<2>(1e-7 * radius, 0.0));
+    std::vector<double> w;
+    const Status near = weights<2>(nodes, Vec<2>::Zero(), Operator<2>::lap(), Config{3, m}, w);
+    EXPECT_EQ(near.info, Info::singular_system) << near.describe();
+    EXPECT_TRUE(w.empty());
+    Config strict{3, m};
+    strict.max_condition = 0.5 * system.status.condition;
+    nodes.pop_back();
+    EXPECT_EQ(weights<2>(nodes, Vec<2>::Zero(), Operator<2>::lap(), strict, w).info, Info::singular_system);
+  }
 }
 
 }  // namespace
