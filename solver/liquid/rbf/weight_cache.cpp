@@ -33,8 +33,15 @@ typename WeightCache<Dim>::Key WeightCache<Dim>::make_key(std::span<const Vec<Di
   key.words.push_back(std::bit_cast<std::int64_t>(config.max_condition));
   key.words.push_back(std::bit_cast<std::int64_t>(config.coincidence_tolerance));
   key.words.push_back(static_cast<std::int64_t>(nodes.size()));
-  for (const auto& x : nodes)
-    for (int k = 0; k < Dim; ++k) key.words.push_back(std::llround((x[k] - at[k]) / (h * quantum_)));
+  for (const auto& x : nodes) {
+    for (int k = 0; k < Dim; ++k) {
+      const double steps = (x[k] - at[k]) / (h * quantum_);
+      const double word = std::round(steps);
+      // Off the quantum by more than round-off: the key's offsets would not be this stencil's.
+      if (std::abs(steps - word) > 1e-3) return Key{};
+      key.words.push_back(static_cast<std::int64_t>(word));
+    }
+  }
   return key;
 }
 
@@ -47,6 +54,10 @@ Status WeightCache<Dim>::weights(std::span<const Vec<Dim>> nodes, const Vec<Dim>
     if (!x.allFinite()) return rbf::weights<Dim>(nodes, at, op, config, out);  // reports non_finite
 
   const Key key = make_key(nodes, at, h, config);
+  if (key.words.empty()) {
+    bypassed_.fetch_add(1, std::memory_order_relaxed);
+    return rbf::weights<Dim>(nodes, at, op, config, out);
+  }
   Shard& shard = shards_[KeyHash{}(key) % n_shards];
   std::shared_ptr<const BasisWeights<Dim>> entry;
   {
@@ -58,8 +69,12 @@ Status WeightCache<Dim>::weights(std::span<const Vec<Dim>> nodes, const Vec<Dim>
     hits_.fetch_add(1, std::memory_order_relaxed);
   } else {
     misses_.fetch_add(1, std::memory_order_relaxed);
+    // The offsets in units of h, read back from the key: a function of the key alone.
     std::vector<Vec<Dim>> unit(nodes.size());
-    for (std::size_t j = 0; j < nodes.size(); ++j) unit[j] = (nodes[j] - at) / h;
+    const std::size_t first = key.words.size() - Dim * nodes.size();
+    for (std::size_t j = 0; j < nodes.size(); ++j)
+      for (int k = 0; k < Dim; ++k)
+        unit[j][k] = static_cast<double>(key.words[first + Dim * j + k]) * quantum_;
     auto computed =
         std::make_shared<const BasisWeights<Dim>>(basis_weights<Dim>(unit, Vec<Dim>::Zero(), config));
     std::unique_lock lock(shard.mutex);
@@ -96,6 +111,7 @@ void WeightCache<Dim>::clear() {
   }
   hits_ = 0;
   misses_ = 0;
+  bypassed_ = 0;
 }
 
 template class WeightCache<2>;

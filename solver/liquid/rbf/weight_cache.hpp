@@ -3,8 +3,13 @@
 // T-junction of the same layout, at any level, has the same node offsets once they are divided by
 // the size h of the centre cell. The key is those offsets quantised to a power-of-two quantum
 // (dyadic cell centres land exactly on it) plus the kernel settings; the stored weights are for
-// h = 1 and are rescaled on the way out (1/h per derivative order). Safe under OpenMP: lookups
-// take a shared lock on one of many shards, a miss computes outside any lock.
+// h = 1 and are rescaled on the way out (1/h per derivative order).
+// An entry is computed from the key's own offsets, not from the stencil that happened to miss
+// first, so its weights do not depend on which thread got there first: assembly is reproducible
+// bit for bit at any thread count. Stencils whose offsets are not on the quantum to round-off
+// (cells of a box whose sides are not in power-of-two ratios) are computed directly, uncached.
+// Safe under OpenMP: lookups take a shared lock on one of many shards, a miss computes outside
+// any lock.
 
 #include <atomic>
 #include <cstdint>
@@ -32,6 +37,7 @@ class WeightCache {
 
   long hits() const { return hits_.load(std::memory_order_relaxed); }
   long misses() const { return misses_.load(std::memory_order_relaxed); }
+  long bypassed() const { return bypassed_.load(std::memory_order_relaxed); }  ///< off-quantum stencils
   std::size_t size() const;
   void clear();
 
@@ -49,12 +55,14 @@ class WeightCache {
   };
   static constexpr int n_shards = 64;
 
+  /// The key, or no key (empty words) when an offset is off the quantum by more than round-off.
   Key make_key(std::span<const Vec<Dim>> nodes, const Vec<Dim>& at, double h, const Config& config) const;
 
   double quantum_;
   std::unique_ptr<Shard[]> shards_;
   std::atomic<long> hits_{0};
   std::atomic<long> misses_{0};
+  std::atomic<long> bypassed_{0};
 };
 
 }  // namespace liquid::rbf

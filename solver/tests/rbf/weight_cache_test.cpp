@@ -72,5 +72,38 @@ TEST(WeightCache, UnusableStencilsAreCachedAsUnusable) {
   EXPECT_THROW(cache.weights(nodes, Vec<2>::Zero(), 0.0, Operator<2>::lap(), Config{}, w), Error);
 }
 
+// An entry depends on its key alone: the same layout met at places whose coordinates round
+// differently gives bit-identical weights whichever place is met first. A layout whose offsets are
+// not on the quantum (a cell side a third of another) is computed directly and not stored.
+TEST(WeightCache, EntriesDependOnTheKeyAloneAndOffQuantumStencilsBypass) {
+  const auto base = verification::quadtree_stencil<2>(1, 1.0, 9u);
+  const double h = 0.0625 * 3.141592653589793;       // cells of a box of side pi, as on a tree
+  const Vec<2> here(0.1, 0.7), there(1234.567, 89.01);  // nodes - at rounds differently
+  const auto place = [&](const Vec<2>& at) {
+    std::vector<Vec<2>> nodes;
+    for (const auto& x : base) nodes.push_back(at + h * x);
+    return nodes;
+  };
+  std::vector<double> a_first, b_second, b_first, a_second;
+  WeightCache<2> one, other;
+  ASSERT_TRUE(one.weights(place(here), here, h, Operator<2>::lap(), Config{}, a_first).usable());
+  ASSERT_TRUE(one.weights(place(there), there, h, Operator<2>::lap(), Config{}, b_second).usable());
+  ASSERT_TRUE(other.weights(place(there), there, h, Operator<2>::lap(), Config{}, b_first).usable());
+  ASSERT_TRUE(other.weights(place(here), here, h, Operator<2>::lap(), Config{}, a_second).usable());
+  EXPECT_EQ(one.hits(), 1);
+  EXPECT_EQ(a_first, a_second);
+  EXPECT_EQ(b_second, b_first);
+
+  std::vector<Vec<2>> thirds = base;
+  for (auto& x : thirds) x[1] /= 3.0;
+  std::vector<double> cached, direct;
+  WeightCache<2> cache;
+  ASSERT_TRUE(cache.weights(thirds, Vec<2>::Zero(), 1.0, Operator<2>::lap(), Config{}, cached).usable());
+  ASSERT_TRUE(weights<2>(thirds, Vec<2>::Zero(), Operator<2>::lap(), Config{}, direct).usable());
+  EXPECT_EQ(cached, direct);
+  EXPECT_EQ(cache.bypassed(), 1);
+  EXPECT_EQ(cache.size(), 0u);
+}
+
 }  // namespace
 }  // namespace liquid::rbf
