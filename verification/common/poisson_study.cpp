@@ -182,14 +182,7 @@ CaseResult run_poisson_study(PoissonStudy<Dim> study, const CaseOptions& options
   Table uniform("uniform grid at the same finest h",
                 {"level", "h", "unknowns", "err p", "err dp/dn", "assembly s", "solve s", "iterations"});
   std::vector<double> hs, ep, eg, nd, uh, uep, ueg, at, ut;  // at/ut: time to solution
-  const CellGraph<Dim> first = study.make_tree(study.level_min, tree_options);
-  for (int level = study.level_min; level <= study.level_max; ++level) {
-    std::optional<CellGraph<Dim>> later;
-    if (level > study.level_min) later.emplace(row_tree<Dim>(study, first, level, tree_options));
-    const CellGraph<Dim>& graph = later ? *later : first;
-    const PoissonRun run = solve_poisson<Dim>(graph, study);
-    result.expect(run.solve.converged(), fmt::format("level {}: {}", level, run.solve.describe()));
-    if (!run.solve.converged()) break;
+  solve_rows<Dim>(study, result, "", [&](int level, const PoissonRun& run) {
     const std::size_t k = hs.size();
     hs.push_back(run.h), ep.push_back(run.err_p), eg.push_back(run.err_grad), nd.push_back(run.n_unknowns);
     at.push_back(run.assembly_seconds + run.solve_seconds);
@@ -210,15 +203,15 @@ CaseResult run_poisson_study(PoissonStudy<Dim> study, const CaseOptions& options
 
     const int fine = level + study.finest_offset;
     const double limit = options.full ? 4.0 * study.uniform_limit : study.uniform_limit;
-    if (std::pow(2.0, Dim * fine) > limit) continue;
+    if (std::pow(2.0, Dim * fine) > limit) return;
     const CellGraph<Dim> flat = tree::uniform<Dim>(study.domain, fine, tree_options);
     const PoissonRun u = solve_poisson<Dim>(flat, study);
-    if (!u.solve.converged()) continue;
+    if (!u.solve.converged()) return;
     uh.push_back(u.h), uep.push_back(u.err_p), ueg.push_back(u.err_grad);
     ut.push_back(u.assembly_seconds + u.solve_seconds);
     uniform.add_row({long(fine), u.h, u.n_unknowns, u.err_p, u.err_grad, u.assembly_seconds, u.solve_seconds,
                      long(u.solve.iterations)});
-  }
+  });
   result.tables.push_back(std::move(adaptive));
   result.tables.push_back(std::move(uniform));
 
@@ -279,22 +272,30 @@ CaseResult run_poisson_study(PoissonStudy<Dim> study, const CaseOptions& options
 
 template <int Dim>
 std::vector<PoissonRun> solve_rows(const PoissonStudy<Dim>& study, CaseResult& result,
-                                   const std::string& label) {
+                                   const std::string& label,
+                                   const std::function<void(int, const PoissonRun&)>& on_row) {
   CellGraphOptions<Dim> options;
   options.max_jump = study.max_jump;
   const CellGraph<Dim> first = study.make_tree(study.level_min, options);
+  const std::string prefix = label.empty() ? "" : label + " ";
   std::vector<PoissonRun> runs;
   for (int level = study.level_min; level <= study.level_max; ++level) {
-    PoissonRun run = solve_poisson<Dim>(row_tree<Dim>(study, first, level, options), study);
-    result.expect(run.solve.converged(), fmt::format("{} level {}: {}", label, level, run.solve.describe()));
+    // The first row solves `first` itself: no second build, no copy.
+    std::optional<CellGraph<Dim>> later;
+    if (level > study.level_min) later.emplace(row_tree<Dim>(study, first, level, options));
+    PoissonRun run = solve_poisson<Dim>(later ? *later : first, study);
+    result.expect(run.solve.converged(), fmt::format("{}level {}: {}", prefix, level, run.solve.describe()));
     if (!run.solve.converged()) break;
+    if (on_row) on_row(level, run);
     runs.push_back(std::move(run));
   }
   return runs;
 }
 
-template std::vector<PoissonRun> solve_rows<2>(const PoissonStudy<2>&, CaseResult&, const std::string&);
-template std::vector<PoissonRun> solve_rows<3>(const PoissonStudy<3>&, CaseResult&, const std::string&);
+template std::vector<PoissonRun> solve_rows<2>(const PoissonStudy<2>&, CaseResult&, const std::string&,
+                                               const std::function<void(int, const PoissonRun&)>&);
+template std::vector<PoissonRun> solve_rows<3>(const PoissonStudy<3>&, CaseResult&, const std::string&,
+                                               const std::function<void(int, const PoissonRun&)>&);
 template CellGraph<2> row_tree<2>(const PoissonStudy<2>&, const CellGraph<2>&, int,
                                   const CellGraphOptions<2>&);
 template CellGraph<3> row_tree<3>(const PoissonStudy<3>&, const CellGraph<3>&, int,

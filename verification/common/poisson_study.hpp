@@ -69,10 +69,12 @@ struct PoissonRun {
 
 /// The rows of `study` at base levels level_min..level_max (trees by row_tree, jumps up to
 /// study.max_jump), solved in order. A row whose solver does not converge is recorded in `result`
-/// under `label` and ends the series.
+/// under `label` and ends the series. `on_row(level, run)`, when given, sees each converged row as
+/// soon as it is solved (run_poisson_study fills its tables and uniform rows there).
 template <int Dim>
 std::vector<PoissonRun> solve_rows(const PoissonStudy<Dim>& study, CaseResult& result,
-                                   const std::string& label);
+                                   const std::string& label,
+                                   const std::function<void(int, const PoissonRun&)>& on_row = {});
 
 template <int Dim>
 PoissonRun solve_poisson(const CellGraph<Dim>& graph, const PoissonStudy<Dim>& study);

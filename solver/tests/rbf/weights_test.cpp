@@ -180,6 +180,15 @@ TEST(RbfFdWeights, ConditionEstimateTracksTheTrueOneAndRefusesNearSingularSystem
     strict.max_condition = 0.5 * system.status.condition;
     nodes.pop_back();
     EXPECT_EQ(weights<2>(nodes, Vec<2>::Zero(), Operator<2>::lap(), strict, w).info, Info::singular_system);
+
+    // An exactly repeated node, with the coincidence test switched off, makes K singular (two equal
+    // rows): a zero pivot must read as refused, not as NaN weights.
+    Config no_coincidence{3, m};
+    no_coincidence.coincidence_tolerance = 0.0;
+    nodes.push_back(nodes[3]);
+    EXPECT_EQ(weights<2>(nodes, Vec<2>::Zero(), Operator<2>::lap(), no_coincidence, w).info,
+              Info::singular_system);
+    EXPECT_TRUE(w.empty());
   }
 }
 
