@@ -6,7 +6,7 @@
 
 #include <algorithm>
 
-#include "common/stencils.hpp"
+#include "support/stencils.hpp"
 #include "liquid/rbf/weight_cache.hpp"
 #include "liquid/rbf/weights.hpp"
 
@@ -18,7 +18,7 @@ template <int Dim>
 std::vector<std::vector<Vec<Dim>>> layouts(int n_nodes, int n_layouts) {
   std::vector<std::vector<Vec<Dim>>> out;
   for (int i = 0; i < n_layouts; ++i) {
-    auto nodes = verification::quadtree_stencil<Dim>(2, 1.0, 17u + i);
+    auto nodes = support::quadtree_stencil<Dim>(2, 1.0, 17u + i);
     std::stable_sort(nodes.begin(), nodes.end(),
                      [](const Vec<Dim>& a, const Vec<Dim>& b) { return a.squaredNorm() < b.squaredNorm(); });
     nodes.resize(std::min<std::size_t>(nodes.size(), n_nodes));

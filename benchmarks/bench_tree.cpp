@@ -21,7 +21,7 @@
 namespace liquid {
 namespace {
 
-tree::LevelSet<3> sphere(const Vec<3>& centre, double radius = 0.3) {
+levelset::Function<3> sphere(const Vec<3>& centre, double radius = 0.3) {
   return [centre, radius](const Vec<3>& x) { return (x - centre).norm() - radius; };
 }
 

@@ -1,6 +1,7 @@
 #include "user_poisson.hpp"
 
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <limits>
 #include <regex>
@@ -9,7 +10,8 @@
 #include <fmt/format.h>
 
 #include "common/expression.hpp"
-#include "common/poisson_study.hpp"
+#include "options.hpp"
+#include "studies/poisson_study.hpp"
 #include "liquid/core/error.hpp"
 #include "liquid/levelset/levelset.hpp"
 #include "liquid/tree/builders.hpp"
@@ -55,30 +57,48 @@ CaseResult run(const UserPoissonArgs& args) {
   LIQUID_VERIFY(args.max_jump >= 1, "--max-jump must be at least 1, got {}", args.max_jump);
 
   auto exact = std::make_shared<Expression<Dim>>(args.exact, "--exact");
+  // A value that is not finite names --exact and the point, wherever the study meets it.
+  const auto finite = [exact](double v, const Vec<Dim>& x, const char* what) {
+    if (!std::isfinite(v))
+      throw Error(fmt::format("--exact '{}': {} is {} at ({:.6g})", exact->text(), what, v,
+                              fmt::join(x.data(), x.data() + Dim, ", ")));
+    return v;
+  };
   std::shared_ptr<Expression<Dim>> phi;
   if (!args.levelset.empty()) phi = std::make_shared<Expression<Dim>>(args.levelset, "--levelset");
 
   PoissonStudy<Dim> s;
   s.domain = domain;
-  s.exact = [exact](const Vec<Dim>& x) { return (*exact)(x); };
-  s.gradient = [exact](const Vec<Dim>& x) {
+  s.exact = [exact, finite](const Vec<Dim>& x) { return finite((*exact)(x), x, "p"); };
+  s.gradient = [exact, finite](const Vec<Dim>& x) {
     Vec<Dim> g;
-    for (int k = 0; k < Dim; ++k) g[k] = exact->derivative(x, k);
+    for (int k = 0; k < Dim; ++k) g[k] = finite(exact->derivative(x, k), x, "a derivative of p");
     return g;
   };
-  s.laplacian = [exact](const Vec<Dim>& x) { return exact->laplacian(x); };
+  s.laplacian = [exact, finite](const Vec<Dim>& x) { return finite(exact->laplacian(x), x, "f = Lap p"); };
   if (phi) s.levelset = [phi](const Vec<Dim>& x) { return (*phi)(x); };
   s.dirichlet_walls = args.bc == "dirichlet";
   s.max_jump = args.max_jump;
-  s.solver.kind = linalg::parse_solver(args.solver);
-  s.order_floor = s.order_grad_floor = -std::numeric_limits<double>::infinity();  // a study, not a test
+  s.solver.kind = args.solver;
+  s.rows = args.rows;
+  // A study asserts only what the user expects of it.
+  s.order_floor = s.order_grad_floor = -std::numeric_limits<double>::infinity();
+  s.asserted = !args.expect_order.empty() || args.expect_error > 0.0;
+  if (!args.expect_order.empty()) {
+    const auto floors = parse_numbers(args.expect_order, "--expect-order");
+    LIQUID_VERIFY(floors.size() == 1 || floors.size() == 2, "--expect-order expects P or P,G, got '{}'",
+                  args.expect_order);
+    for (double v : floors)
+      LIQUID_VERIFY(std::isfinite(v) && v > 0.0 && v < 10.0, "--expect-order: {} is not an order in (0, 10)", v);
+    s.order_floor = floors[0];
+    if (floors.size() == 2) s.order_grad_floor = floors[1];
+  }
+  if (args.expect_error > 0.0) s.error_ceiling = args.expect_error;
 
+  const LevelRange levels = parse_level_range(args.levels, "--levels");
+  s.level_min = levels.first;
+  s.level_max = levels.last;
   std::smatch m;
-  static const std::regex levels(R"(^\s*(\d+)\s*:\s*(\d+)\s*$)");
-  LIQUID_VERIFY(std::regex_match(args.levels, m, levels), "--levels expects A:B, got '{}'", args.levels);
-  s.level_min = std::stoi(m[1]);
-  s.level_max = std::stoi(m[2]);
-  LIQUID_VERIFY(s.level_min <= s.level_max, "--levels {}: the first level exceeds the last", args.levels);
 
   // The refined region: the level set when given, else a circle/sphere at the centre.
   levelset::Function<Dim> band_phi = s.levelset;
@@ -94,7 +114,12 @@ CaseResult run(const UserPoissonArgs& args) {
       return tree::banded<Dim>(domain, band_phi, level, 3.0, o);
     };
   } else if (std::regex_match(args.tree, m, random)) {
-    const std::uint64_t seed = std::stoull(m[1]);
+    std::uint64_t seed = 0;
+    const std::string digits = m.str(1);
+    const auto [end, ec] = std::from_chars(digits.data(), digits.data() + digits.size(), seed);
+    LIQUID_VERIFY(ec == std::errc() && end == digits.data() + digits.size(),
+                  "--tree {}: the seed is out of range (at most {})", args.tree,
+                  std::numeric_limits<std::uint64_t>::max());
     s.make_tree = [domain, seed](int level, const CellGraphOptions<Dim>& o) {
       return tree::random<Dim>(domain, seed, level, level + 2, 0.3, o);
     };
@@ -134,8 +159,9 @@ CaseResult run(const UserPoissonArgs& args) {
   }
 
   CaseOptions options;
-  if (!args.nullspace.empty()) options.nullspace = args.nullspace;
+  if (args.nullspace_given) options.nullspace = args.nullspace;
   if (args.tolerance != 0.0) options.tolerance = args.tolerance;
+  options.max_cells = args.max_cells;
   CaseResult result = run_poisson_study<Dim>(s, options);
   // The smallest errors measured must sit well above what the numerical derivatives could add:
   // an error e in f moves p by about e L^2 (L the domain's size); grad p is compared directly.
@@ -176,10 +202,13 @@ CaseResult run(const UserPoissonArgs& args) {
 std::string describe(const UserPoissonArgs& a) {
   return fmt::format(
       "liquid-verify poisson --dim {} --exact '{}'{} --domain {} --bc {} --tree {} --max-jump {} "
-      "--levels {} --solver {}{}{}",
+      "--levels {} --rows {} --solver {} --nullspace {} --tolerance {:g} --expect-order {} --expect-error {} "
+      "--max-cells {}",
       a.dim, a.exact, a.levelset.empty() ? "" : " --levelset '" + a.levelset + "'", a.domain, a.bc, a.tree,
-      a.max_jump, a.levels, a.solver, a.nullspace.empty() ? "" : " --nullspace " + a.nullspace,
-      a.tolerance != 0.0 ? fmt::format(" --tolerance {:g}", a.tolerance) : "");
+      a.max_jump, a.levels, to_string(a.rows), linalg::to_string(a.solver),
+      a.nullspace_given ? (a.nullspace == mac::Nullspace::pin ? "pin" : "zero-mean") : "default",
+      a.tolerance != 0.0 ? a.tolerance : 1e-10, a.expect_order.empty() ? "none" : a.expect_order,
+      a.expect_error > 0.0 ? fmt::format("{:g}", a.expect_error) : "none", a.max_cells);
 }
 
 CaseResult run_user_poisson(const UserPoissonArgs& args) {

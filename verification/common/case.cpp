@@ -1,4 +1,4 @@
-#include "case.hpp"
+#include "common/case.hpp"
 
 #include <algorithm>
 #include <utility>
@@ -7,22 +7,31 @@
 
 namespace liquid::verification {
 
-void refuse_study_options(const CaseOptions& options, const std::string& case_name, const std::string& why,
-                          bool levels_too) {
-  for (const auto& [given, flag] :
-       {std::pair{options.perturb.has_value(), "--perturb"},
-        std::pair{options.solver.has_value(), "--solver"},
-        std::pair{options.max_jump.has_value(), "--max-jump"},
-        std::pair{options.stencil.has_value(), "--stencil"}, std::pair{options.rows.has_value(), "--rows"},
-        std::pair{options.rbf_exponent.has_value(), "--rbf-exponent"},
-        std::pair{options.rbf_degree.has_value(), "--rbf-degree"},
-        std::pair{options.gradient_degree.has_value(), "--gradient-degree"},
-        std::pair{options.stencil_growth.has_value(), "--stencil-growth"},
-        std::pair{options.nullspace.has_value(), "--nullspace"},
-        std::pair{options.tolerance.has_value(), "--tolerance"},
-        std::pair{levels_too && options.level_min.has_value(), "--levels"}})
-    LIQUID_VERIFY(!given, "{} does not take {}: {}", case_name, flag, why);
+const char* flag_of(Option option) {
+  switch (option) {
+    case Option::levels: return "--levels";
+    case Option::max_jump: return "--max-jump";
+    case Option::solver: return "--solver";
+    case Option::stencil: return "--stencil";
+    case Option::rbf_exponent: return "--rbf-exponent";
+    case Option::rbf_degree: return "--rbf-degree";
+    case Option::gradient_degree: return "--gradient-degree";
+    case Option::stencil_growth: return "--stencil-growth";
+    case Option::rows: return "--rows";
+    case Option::nullspace: return "--nullspace";
+    case Option::tolerance: return "--tolerance";
+    case Option::perturb: return "--perturb";
+    case Option::trees: return "--trees";
+  }
+  return "?";
 }
+
+const char* to_string(RowProtocol rows) { return rows == RowProtocol::refine ? "refine" : "rebuild"; }
+
+bool CaseInfo::accepts_option(Option o) const {
+  return std::find(accepts.begin(), accepts.end(), o) != accepts.end();
+}
+bool CaseInfo::perturbable() const { return accepts_option(Option::perturb); }
 
 std::vector<CaseInfo>& case_registry() {
   static std::vector<CaseInfo> cases;

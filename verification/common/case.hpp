@@ -8,28 +8,65 @@
 #include <string>
 #include <vector>
 
-#include "json.hpp"
-#include "table.hpp"
+#include "common/json.hpp"
+#include "common/table.hpp"
+#include "liquid/linalg/solver.hpp"
+#include "liquid/mac/laplacian.hpp"
+#include "liquid/mac/stencil.hpp"
 
 namespace liquid::verification {
 
-/// Options a user may pass to `liquid-verify run`; a case reads those that apply to it.
-struct CaseOptions {
-  std::optional<int> level_min, level_max;  ///< --levels A:B
-  std::optional<int> max_jump;              ///< --max-jump K
-  std::optional<std::string> solver;        ///< --solver NAME
-  std::optional<std::string> stencil;       ///< --stencil RULE (nearest, face-grown, ring)
-  std::optional<std::string> perturb;       ///< --perturb first-order: a deliberately degraded scheme
-  std::optional<int> rbf_exponent;          ///< --rbf-exponent S: PHS r^S of the RBF-FD Laplacian rows
-  std::optional<int> rbf_degree;            ///< --rbf-degree M: their polynomial degree
-  std::optional<int> gradient_degree;       ///< --gradient-degree M: degree of RBF-FD face gradients
-  std::optional<double> stencil_growth;     ///< --stencil-growth G: RBF-FD stencils of G x terms + 1 nodes
-  std::optional<std::string> rows;          ///< --rows rebuild|refine: how later rows' trees are made
-  std::optional<std::string> nullspace;     ///< --nullspace pin|zero-mean: a pure Neumann system's fix
-  std::optional<double> tolerance;          ///< --tolerance T: the solver's relative residual
-  std::optional<std::string> trees_dir;     ///< --trees DIR: write the trees checked (HDF5 + XDMF)
-  bool full = false;                        ///< the full suite's extent rather than the quick one
+/// A study option of `liquid-verify run`; a case declares those it accepts (CaseInfo::accepts), and
+/// `run` refuses any other with exit 2.
+enum class Option {
+  levels, max_jump, solver, stencil, rbf_exponent, rbf_degree, gradient_degree, stencil_growth, rows,
+  nullspace, tolerance, perturb, trees
 };
+using OptionSet = std::vector<Option>;
+/// The command-line flag of an option ("--max-jump").
+const char* flag_of(Option option);
+
+/// How the later rows of a convergence study get their trees.
+enum class RowProtocol {
+  refine,   ///< split every cell of the first row's tree once more per row (the paper's protocol)
+  rebuild,  ///< a fresh tree per row by the study's rule (band widths in finest cells shrink with h)
+};
+const char* to_string(RowProtocol rows);
+
+/// A deliberately degraded scheme, to watch the gate fail.
+enum class Perturbation { first_order };
+
+/// Base levels A:B of a study's rows.
+struct LevelRange {
+  int first = 0, last = 0;
+};
+
+/// Typed options of `liquid-verify run`, parsed and range-checked once in main; a case reads those it
+/// declared.
+struct CaseOptions {
+  std::optional<LevelRange> levels;                ///< --levels A:B
+  std::optional<int> max_jump;                     ///< --max-jump K (>= 1)
+  std::optional<linalg::SolverKind> solver;        ///< --solver NAME
+  std::optional<mac::StencilRule> stencil;         ///< --stencil RULE
+  std::optional<int> rbf_exponent;                 ///< --rbf-exponent S: PHS r^S of the Laplacian rows
+  std::optional<int> rbf_degree;                   ///< --rbf-degree M: their polynomial degree
+  std::optional<int> gradient_degree;              ///< --gradient-degree M: degree of face gradients
+  std::optional<double> stencil_growth;            ///< --stencil-growth G
+  std::optional<RowProtocol> rows;                 ///< --rows refine|rebuild
+  std::optional<mac::Nullspace> nullspace;         ///< --nullspace pin|zero-mean
+  std::optional<double> tolerance;                 ///< --tolerance T: the solver's relative residual
+  std::optional<Perturbation> perturb;             ///< --perturb first-order
+  std::optional<std::string> trees_dir;            ///< --trees DIR: write the trees checked
+  long max_cells = 0;                              ///< refuse rows above this many cells (0: no limit)
+  bool full = false;                               ///< the full suite's extent rather than the quick one
+};
+
+/// Every option of a Poisson convergence study (run_poisson_study reads them all).
+inline const OptionSet poisson_study_options{Option::levels,          Option::max_jump,  Option::solver,
+                                             Option::stencil,         Option::rbf_exponent, Option::rbf_degree,
+                                             Option::gradient_degree, Option::stencil_growth, Option::rows,
+                                             Option::nullspace,       Option::tolerance, Option::perturb};
+inline const OptionSet no_options{};
 
 /// A figure the accuracy gate compares with its accepted value in reference/<case>.toml.
 struct GateFigure {
@@ -46,6 +83,8 @@ struct CaseResult {
   std::vector<std::string> notes;     ///< what a reader should know about the numbers
   Json fields = Json::object();       ///< extra top-level JSON fields ("order", "order_grad", ...)
   std::vector<GateFigure> gate;       ///< figures the accuracy gate checks against reference/
+  std::vector<std::string> warnings;  ///< numbers a reader should doubt (pre-asymptotic rows, ...)
+  bool asserted = true;               ///< false: the case checked nothing (a study without expectations)
 
   /// Records an expectation; a false one fails the case with `what`.
   void expect(bool ok, const std::string& what) {
@@ -61,15 +100,10 @@ struct CaseInfo {
   std::string summary;  ///< one line for `liquid-verify list`
   bool quick = true;    ///< part of the quick suite (CI) as well as the full one
   std::function<CaseResult(const CaseOptions&)> run;
-  bool writes_trees = false;  ///< honours CaseOptions::trees_dir
+  OptionSet accepts = no_options;  ///< the options the case reads; `run` refuses any other
+  bool perturbable() const;        ///< accepts Option::perturb (the gate's --perturb)
+  bool accepts_option(Option o) const;
 };
-
-/// For a case that fixes its own scheme: throws, naming the first study option given (--perturb,
-/// --solver, --max-jump, --stencil, --rows, --rbf-exponent, --rbf-degree, --gradient-degree,
-/// --stencil-growth, --nullspace, --tolerance, and --levels when `levels_too`), as
-/// "<case> does not take <flag>: <why>".
-void refuse_study_options(const CaseOptions& options, const std::string& case_name, const std::string& why,
-                          bool levels_too = false);
 
 /// All registered cases, in name order.
 std::vector<CaseInfo>& case_registry();

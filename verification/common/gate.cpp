@@ -49,7 +49,7 @@ GateTolerance read_tolerance(const toml::table& doc, const std::string& path) {
     auto get = [&](const char* key, double& out) {
       if (const auto* node = tol->get(key)) {
         const auto v = node->value<double>();
-        LIQUID_VERIFY(v && *v >= 0.0, "{}: tolerance.{} must be a non-negative number",
+        LIQUID_VERIFY(v && std::isfinite(*v) && *v >= 0.0, "{}: tolerance.{} must be a finite non-negative number",
                       where(path, node->source()), key);
         out = *v;
       }
@@ -73,6 +73,35 @@ toml::table parse_file(const std::string& path) {
 
 }  // namespace
 
+std::vector<AcceptedFigure> read_reference(const std::string& path, GateTolerance& tol) {
+  const toml::table doc = parse_file(path);
+  tol = read_tolerance(doc, path);
+  const auto* list = doc["figure"].as_array();
+  LIQUID_VERIFY(list != nullptr, "{}: no [[figure]] entries", path);
+  std::vector<AcceptedFigure> out;
+  for (const auto& node : *list) {
+    const auto* t = node.as_table();
+    LIQUID_VERIFY(t != nullptr, "{}: [[figure]] must be a table", where(path, node.source()));
+    const auto name = (*t)["name"].value<std::string>();
+    const auto kind = (*t)["kind"].value<std::string>();
+    const auto value = (*t)["value"].value<double>();
+    const std::string at = where(path, t->source());
+    LIQUID_VERIFY(name && kind && value, "{}: a figure needs name, kind and value", at);
+    LIQUID_VERIFY(std::isfinite(*value), "{}: figure '{}' has the value {}, not a finite number", at, *name, *value);
+    for (const auto& seen : out)
+      LIQUID_VERIFY(seen.name != *name, "{}: figure '{}' is accepted twice (first at {})", at, *name, seen.where);
+    out.push_back({*name, *kind, parse_kind(*kind, at), *value, at});
+  }
+  return out;
+}
+
+void validate_reference(const std::string& case_name, const std::string& reference_dir) {
+  const std::string path = reference_path(reference_dir, case_name);
+  if (!std::filesystem::exists(path)) return;  // reported as a missing reference after the run
+  GateTolerance tol;
+  (void)read_reference(path, tol);
+}
+
 bool GateOutcome::passed() const {
   if (!problems.empty()) return false;
   for (const auto& l : lines)
@@ -89,22 +118,16 @@ GateOutcome compare_with_reference(const std::string& case_name, const std::vect
         fmt::format("no accepted figures: {} is missing (run the gate with --bless)", path));
     return out;
   }
-  const toml::table doc = parse_file(path);
-  const GateTolerance tol = read_tolerance(doc, path);
-  const auto* list = doc["figure"].as_array();
-  LIQUID_VERIFY(list != nullptr, "{}: no [[figure]] entries", path);
-  for (const auto& node : *list) {
-    const auto* t = node.as_table();
-    LIQUID_VERIFY(t != nullptr, "{}: [[figure]] must be a table", where(path, node.source()));
-    const auto name = (*t)["name"].value<std::string>();
-    const auto kind = (*t)["kind"].value<std::string>();
-    const auto value = (*t)["value"].value<double>();
-    LIQUID_VERIFY(name && kind && value, "{}: a figure needs name, kind and value", where(path, t->source()));
+  GateTolerance tol;
+  const std::vector<AcceptedFigure> accepted = read_reference(path, tol);
+  for (const AcceptedFigure& a : accepted) {
+    const std::string* name = &a.name;
+    const std::string* kind = &a.kind;
     GateLine line;
-    line.figure = *name;
-    line.kind = *kind;
-    line.accepted = *value;
-    const GateFigure::Kind k = parse_kind(*kind, where(path, t->source()));
+    line.figure = a.name;
+    line.kind = a.kind;
+    line.accepted = a.value;
+    const GateFigure::Kind k = a.parsed;
     const GateFigure* now = nullptr;
     for (const auto& f : figures)
       if (f.name == *name) now = &f;
@@ -112,6 +135,9 @@ GateOutcome compare_with_reference(const std::string& case_name, const std::vect
       out.problems.push_back(fmt::format("{}: accepted figure '{}' is no longer produced", case_name, *name));
       continue;
     }
+    // A relabelled kind would switch its check off (an order read as an error passes when it rises).
+    LIQUID_VERIFY(k == now->kind, "{}: figure '{}' is accepted as kind '{}', but the case produces it as '{}'",
+                  a.where, *name, *kind, to_string(now->kind));
     line.now = now->value;
     switch (k) {
       case GateFigure::Kind::error:

@@ -18,6 +18,20 @@ struct GateTolerance {
   double iterations_rel = 0.5;
 };
 
+/// One accepted figure as read from reference/<case>.toml.
+struct AcceptedFigure {
+  std::string name, kind;
+  GateFigure::Kind parsed;
+  double value;
+  std::string where;  ///< file:line
+};
+
+/// Reads and checks an accepted file: every figure named once, of a known kind, with a finite value;
+/// finite non-negative tolerances. Throws liquid::Error naming file:line.
+std::vector<AcceptedFigure> read_reference(const std::string& path, GateTolerance& tolerance);
+/// read_reference() on reference_dir/<case>.toml when it exists, before the case runs.
+void validate_reference(const std::string& case_name, const std::string& reference_dir);
+
 struct GateLine {
   std::string figure;
   std::string kind;

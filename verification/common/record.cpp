@@ -9,10 +9,17 @@
 
 namespace liquid::verification {
 
+std::string status_word(const CaseResult& result) {
+  if (!result.passed) return "FAILED";
+  if (!result.asserted) return "ran, nothing asserted (--expect-order P[,G] or --expect-error E would check)";
+  return "passed";
+}
+
 Json result_json(const std::string& name, const CaseResult& result, double seconds) {
   Json j = Json::object();
   j.set("case", name);
   j.set("passed", result.passed);
+  j.set("asserted", result.asserted);
   j.set("seconds", seconds);
   j.set("rows", result.tables.empty() ? Json::array() : result.tables.front().to_json());
   Json tables = Json::array();
@@ -29,6 +36,9 @@ Json result_json(const std::string& name, const CaseResult& result, double secon
   Json notes = Json::array();
   for (const auto& n : result.notes) notes.push(n);
   j.set("notes", std::move(notes));
+  Json warnings = Json::array();
+  for (const auto& w : result.warnings) warnings.push(w);
+  j.set("warnings", std::move(warnings));
   // Case-specific top-level fields last (order, order_grad, ...).
   if (const auto* fields = result.fields.items())
     for (const auto& [key, value] : *fields) j.set(key, value);
@@ -39,19 +49,34 @@ std::string result_text(const std::string& name, const CaseResult& result, doubl
   std::string out = fmt::format("== {} ==\n", name);
   for (const auto& t : result.tables) out += t.to_text() + "\n";
   for (const auto& n : result.notes) out += "note: " + n + "\n";
+  for (const auto& w : result.warnings) out += "WARNING: " + w + "\n";
   for (const auto& f : result.failures) out += "FAILED: " + f + "\n";
-  out += fmt::format("{}: {} in {:.2f} s\n", name, result.passed ? "passed" : "FAILED", seconds);
+  out += fmt::format("{}: {} in {:.2f} s\n", name, status_word(result), seconds);
   return out;
 }
 
 std::string result_markdown(const std::string& name, const std::string& summary, const CaseResult& result,
                             double seconds) {
-  std::string out = fmt::format("## `{}` — {}\n\n{}\n\n", name, result.passed ? "passed" : "FAILED", summary);
+  std::string out = fmt::format("## `{}` — {}\n\n{}\n\n", name, status_word(result), summary);
   for (const auto& t : result.tables) out += t.to_markdown() + "\n";
   for (const auto& n : result.notes) out += "- " + n + "\n";
+  for (const auto& w : result.warnings) out += "- **warning:** " + w + "\n";
   for (const auto& f : result.failures) out += "- **failed:** " + f + "\n";
   out += fmt::format("\nRun time: {:.2f} s.\n", seconds);
   return out;
+}
+
+void check_output_path(const std::string& flag, const std::string& path) {
+  namespace fs = std::filesystem;
+  LIQUID_VERIFY(!path.empty(), "{}: the path is empty", flag);
+  const fs::path target(path);
+  LIQUID_VERIFY(!fs::is_directory(target), "{}: '{}' is a folder, not a file", flag, path);
+  LIQUID_VERIFY(target.has_filename(), "{}: '{}' names no file", flag, path);
+  std::error_code ec;
+  const fs::path folder = target.has_parent_path() ? target.parent_path() : fs::path(".");
+  fs::create_directories(folder, ec);
+  LIQUID_VERIFY(!ec && fs::is_directory(folder), "{}: cannot create the folder '{}' of '{}': {}", flag,
+                folder.string(), path, ec ? ec.message() : "not a folder");
 }
 
 void write_file(const std::string& path, const std::string& text) {
@@ -69,6 +94,10 @@ void write_file(const std::string& path, const std::string& text) {
     LIQUID_VERIFY(out.good(), "writing '{}' failed (disk full?)", tmp.string());
   }
   fs::rename(tmp, target, ec);
+  if (ec) {
+    std::error_code ignored;
+    fs::remove(tmp, ignored);
+  }
   LIQUID_VERIFY(!ec, "cannot move '{}' to '{}': {}", tmp.string(), path, ec.message());
 }
 

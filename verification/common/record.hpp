@@ -14,6 +14,13 @@ std::string result_text(const std::string& name, const CaseResult& result, doubl
 std::string result_markdown(const std::string& name, const std::string& summary, const CaseResult& result,
                             double seconds);
 
+/// "passed", "FAILED", or for a case that asserted nothing, a sentence saying so.
+std::string status_word(const CaseResult& result);
+
+/// Checks, before any work, that `path` can be written: not empty, not a folder, its folder creatable.
+/// Throws liquid::Error naming `flag` and the path.
+void check_output_path(const std::string& flag, const std::string& path);
+
 /// Writes `text` to `path` atomically (creating parent folders). Throws liquid::Error naming the path.
 void write_file(const std::string& path, const std::string& text);
 

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "liquid/core/error.hpp"
+#include "liquid/rbf/polynomial.hpp"
 
 namespace liquid::mac {
 
@@ -24,6 +25,10 @@ const char* to_string(StencilRule rule) {
       return "ring";
   }
   return "unknown";
+}
+
+int stencil_size(int dim, int degree, double growth) {
+  return static_cast<int>(std::ceil(growth * rbf::n_polynomial_terms(dim, degree))) + 1;
 }
 
 namespace {
@@ -102,8 +107,9 @@ void candidates(const CellGraph<Dim>& graph, std::span<const CellId> seeds, cons
 }  // namespace
 
 template <int Dim>
-void gather_stencil(const CellGraph<Dim>& graph, const DofLayout<Dim>& layout, std::span<const CellId> seeds,
-                    const Vec<Dim>& at, StencilRule rule, int n_target, std::vector<StencilNode<Dim>>& out) {
+void gather_stencil(const CellGraph<Dim>& graph, const DofLayout<Dim>& layout, const Boundary<Dim>& boundary,
+                    std::span<const CellId> seeds, const Vec<Dim>& at, StencilRule rule, int n_target,
+                    std::vector<StencilNode<Dim>>& out) {
   LIQUID_ASSERT(!seeds.empty(), "gather_stencil needs a seed cell");
   thread_local std::vector<CellId> cells;
   std::size_t n_core_cells = 0, n_core_nodes = 0;
@@ -118,11 +124,11 @@ void gather_stencil(const CellGraph<Dim>& graph, const DofLayout<Dim>& layout, s
     const Vec<Dim> x = graph.centre(c);
     if (dof < 0) {
       // Outside the liquid: the interface point on the segment from the anchor carries the value.
-      if (!layout.levelset) continue;
-      const double phi_a = layout.levelset(anchor), phi_x = layout.levelset(x);
-      const auto cut = levelset::crossing<Dim>(layout.levelset, anchor, x, phi_a, phi_x);
+      if (!boundary.levelset) continue;
+      const double phi_a = boundary.levelset(anchor), phi_x = boundary.levelset(x);
+      const auto cut = levelset::crossing<Dim>(boundary.levelset, anchor, x, phi_a, phi_x);
       if (!cut) continue;  // the segment leaves and re-enters: this cell is not seen from the anchor
-      out.push_back({cut->point, -1, layout.dirichlet(cut->point)});
+      out.push_back({cut->point, -1, boundary.dirichlet(cut->point)});
       continue;
     }
     out.push_back({x, dof, 0.0});
@@ -132,27 +138,34 @@ void gather_stencil(const CellGraph<Dim>& graph, const DofLayout<Dim>& layout, s
     std::array<int, Dim> touch{};
     for (int k = 0; k < Dim; ++k) touch[k] = b.lo[k] <= domain.lo[k] ? -1 : (b.hi[k] >= domain.hi[k] ? 1 : 0);
     for (int mask = 1; mask < (1 << Dim); ++mask) {
-      Vec<Dim> g = x;
+      // g: the image; m: x projected onto the walls crossed (where the image's flux is taken).
+      Vec<Dim> g = x, m = x;
       bool ok = true;
       for (int k = 0; k < Dim && ok; ++k) {
         if (!(mask >> k & 1)) continue;
-        if (touch[k] == 0)
+        if (touch[k] == 0) {
           ok = false;
-        else if (layout.dirichlet_walls)
-          g[k] = touch[k] < 0 ? domain.lo[k] : domain.hi[k];
-        else
-          g[k] = 2.0 * (touch[k] < 0 ? domain.lo[k] : domain.hi[k]) - x[k];
+          continue;
+        }
+        m[k] = touch[k] < 0 ? domain.lo[k] : domain.hi[k];
+        g[k] = boundary.dirichlet_walls ? m[k] : 2.0 * m[k] - x[k];
       }
       if (!ok) continue;
-      if (layout.dirichlet_walls)
-        out.push_back({g, -1, layout.dirichlet(g)});
-      else
-        out.push_back({g, dof, 0.0});
+      if (boundary.dirichlet_walls) {
+        out.push_back({g, -1, boundary.dirichlet(g)});
+        continue;
+      }
+      // p(g) - p(x) = grad p(m) . (g - x) + O(|g - x|^3), and (g - x) is 2 |x_k - m_k| along each
+      // outward normal crossed.
+      double offset = 0.0;
+      for (int k = 0; k < Dim; ++k)
+        if (mask >> k & 1) offset += std::abs(g[k] - x[k]) * boundary.flux(m, k, touch[k]);
+      out.push_back({g, dof, offset});
     }
   }
   // A crossing point within 1e-3 cell sizes of another node adds nothing but a near-singular
   // system: drop it (the node beside it already sits at the interface to that accuracy).
-  if (layout.levelset) {
+  if (boundary.levelset) {
     const double tol2 = std::pow(1e-3 * graph.cell_size(seeds[0]).maxCoeff(), 2);
     std::vector<StencilNode<Dim>> kept;
     for (std::size_t a = 0; a < out.size(); ++a) {
@@ -182,9 +195,56 @@ void gather_stencil(const CellGraph<Dim>& graph, const DofLayout<Dim>& layout, s
   out.resize(keep);
 }
 
-template void gather_stencil<2>(const CellGraph<2>&, const DofLayout<2>&, std::span<const CellId>,
-                                const Vec<2>&, StencilRule, int, std::vector<StencilNode<2>>&);
-template void gather_stencil<3>(const CellGraph<3>&, const DofLayout<3>&, std::span<const CellId>,
-                                const Vec<3>&, StencilRule, int, std::vector<StencilNode<3>>&);
+template <int Dim>
+rbf::Status stencil_weights(std::vector<StencilNode<Dim>>& nodes, const Vec<Dim>& at, const rbf::Operator<Dim>& op,
+                            const rbf::Config& config, std::vector<double>& w, long& n_retried,
+                            rbf::WeightCache<Dim>* cache, double h) {
+  thread_local std::vector<Vec<Dim>> xs;
+  thread_local std::vector<int> order;
+  thread_local std::vector<StencilNode<Dim>> sorted;
+  const auto positions = [&] {
+    xs.clear();
+    for (const auto& n : nodes) xs.push_back(n.x);
+  };
+  if (cache != nullptr) {
+    // Weights follow their nodes, so the caller is unaffected, except that a retry below then
+    // drops the farthest node by distance rather than the last one gathered.
+    positions();
+    rbf::canonical_order<Dim>(xs, at, h, order);
+    sorted.clear();
+    for (int j : order) sorted.push_back(nodes[j]);
+    nodes.swap(sorted);
+  }
+  const auto solve = [&] {
+    positions();
+    return cache != nullptr ? cache->weights(xs, at, h, op, config, w) : rbf::weights<Dim>(xs, at, op, config, w);
+  };
+  for (int attempt = 0; attempt < 4; ++attempt) {
+    const rbf::Status st = solve();
+    if (st.usable()) return st;
+    if (st.info == rbf::Info::coincident_nodes && st.node_b > 0) {
+      nodes.erase(nodes.begin() + st.node_b);  // keep the nearer of the two
+    } else if (st.info == rbf::Info::singular_system && nodes.size() > 2) {
+      nodes.pop_back();  // drop the farthest node
+    } else {
+      return st;
+    }
+    ++n_retried;
+  }
+  return solve();
+}
+
+template void gather_stencil<2>(const CellGraph<2>&, const DofLayout<2>&, const Boundary<2>&,
+                                std::span<const CellId>, const Vec<2>&, StencilRule, int,
+                                std::vector<StencilNode<2>>&);
+template void gather_stencil<3>(const CellGraph<3>&, const DofLayout<3>&, const Boundary<3>&,
+                                std::span<const CellId>, const Vec<3>&, StencilRule, int,
+                                std::vector<StencilNode<3>>&);
+template rbf::Status stencil_weights<2>(std::vector<StencilNode<2>>&, const Vec<2>&, const rbf::Operator<2>&,
+                                        const rbf::Config&, std::vector<double>&, long&, rbf::WeightCache<2>*,
+                                        double);
+template rbf::Status stencil_weights<3>(std::vector<StencilNode<3>>&, const Vec<3>&, const rbf::Operator<3>&,
+                                        const rbf::Config&, std::vector<double>&, long&, rbf::WeightCache<3>*,
+                                        double);
 
 }  // namespace liquid::mac

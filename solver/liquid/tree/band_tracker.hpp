@@ -32,7 +32,7 @@ namespace liquid::tree {
 /// `cells` (dead ids skipped): split where the rule refines a leaf, merge where it would not refine
 /// the leaf's parent. `marks` (out) is cleared first. Uses OpenMP.
 template <int Dim>
-void mark_narrow_band(const CellGraph<Dim>& graph, const LevelSet<Dim>& phi, int coarse_level, int fine_level,
+void mark_narrow_band(const CellGraph<Dim>& graph, const levelset::Function<Dim>& phi, int coarse_level, int fine_level,
                       double band, std::span<const CellId> cells, MarkList& marks);
 
 template <int Dim>
@@ -44,7 +44,7 @@ class NarrowBandTracker {
 
   /// Marks the graph towards the narrow band of `phi` (marks is cleared first). Visits candidates()
   /// only, except on the first call, which visits every cell.
-  void mark(const CellGraph<Dim>& graph, const LevelSet<Dim>& phi, MarkList& marks);
+  void mark(const CellGraph<Dim>& graph, const levelset::Function<Dim>& phi, MarkList& marks);
   /// Takes in what a change did (call it after every adapt, split or merge of the graph).
   void update(const CellGraph<Dim>& graph, const AdaptReport& report);
 

@@ -23,7 +23,7 @@ double finest_size(const Box<Dim>& domain, int level) {
 
 /// Lower bound of |phi| over the node, for a phi that is a distance.
 template <int Dim>
-double distance_bound(const TreeNode<Dim>& node, const LevelSet<Dim>& phi) {
+double distance_bound(const TreeNode<Dim>& node, const levelset::Function<Dim>& phi) {
   return std::abs(phi(node.box.centre())) - 0.5 * node.box.size().norm();
 }
 
@@ -43,7 +43,7 @@ CellGraph<Dim> uniform(const Box<Dim>& domain, int level, const CellGraphOptions
 }
 
 template <int Dim>
-CellGraph<Dim> banded(const Box<Dim>& domain, const LevelSet<Dim>& phi, int level, double band,
+CellGraph<Dim> banded(const Box<Dim>& domain, const levelset::Function<Dim>& phi, int level, double band,
                       const CellGraphOptions<Dim>& options) {
   check_levels<Dim>(level, level + 2, "banded");
   LIQUID_VERIFY(band > 0.0, "tree::banded: the band width must be positive (got {})", band);
@@ -60,7 +60,7 @@ CellGraph<Dim> banded(const Box<Dim>& domain, const LevelSet<Dim>& phi, int leve
 }
 
 template <int Dim>
-bool narrow_band_refines(const TreeNode<Dim>& node, const LevelSet<Dim>& phi, int coarse_level,
+bool narrow_band_refines(const TreeNode<Dim>& node, const levelset::Function<Dim>& phi, int coarse_level,
                          int fine_level, double band, double fine_size) {
   if (node.level < coarse_level) return true;
   if (node.level >= fine_level) return false;
@@ -68,7 +68,7 @@ bool narrow_band_refines(const TreeNode<Dim>& node, const LevelSet<Dim>& phi, in
 }
 
 template <int Dim>
-CellGraph<Dim> narrow_band(const Box<Dim>& domain, const LevelSet<Dim>& phi, int coarse_level, int fine_level,
+CellGraph<Dim> narrow_band(const Box<Dim>& domain, const levelset::Function<Dim>& phi, int coarse_level, int fine_level,
                            double band, const CellGraphOptions<Dim>& options) {
   check_levels<Dim>(coarse_level, fine_level, "narrow_band");
   LIQUID_VERIFY(band > 0.0, "tree::narrow_band: the band width must be positive (got {})", band);
@@ -82,7 +82,7 @@ CellGraph<Dim> narrow_band(const Box<Dim>& domain, const LevelSet<Dim>& phi, int
 }
 
 template <int Dim>
-Mark narrow_band_mark(const CellGraph<Dim>& graph, CellId c, const LevelSet<Dim>& phi, int coarse_level,
+Mark narrow_band_mark(const CellGraph<Dim>& graph, CellId c, const levelset::Function<Dim>& phi, int coarse_level,
                       int fine_level, double band, double fine_size) {
   const TreeNode<Dim> node{graph.level(c), graph.address(c), graph.box(c)};
   if (narrow_band_refines(node, phi, coarse_level, fine_level, band, fine_size)) return Mark::split;
@@ -101,7 +101,7 @@ Mark narrow_band_mark(const CellGraph<Dim>& graph, CellId c, const LevelSet<Dim>
 }
 
 template <int Dim>
-void mark_narrow_band(const CellGraph<Dim>& graph, const LevelSet<Dim>& phi, int coarse_level, int fine_level,
+void mark_narrow_band(const CellGraph<Dim>& graph, const levelset::Function<Dim>& phi, int coarse_level, int fine_level,
                       double band, std::vector<Mark>& marks) {
   check_levels<Dim>(coarse_level, fine_level, "mark_narrow_band");
   const double h = finest_size(graph.domain(), fine_level);
@@ -153,14 +153,14 @@ CellGraph<Dim> random(const Box<Dim>& domain, std::uint64_t seed, int min_level,
 
 #define LIQUID_TREE_BUILDERS(D)                                                                           \
   template CellGraph<D> uniform<D>(const Box<D>&, int, const CellGraphOptions<D>&);                       \
-  template CellGraph<D> banded<D>(const Box<D>&, const LevelSet<D>&, int, double,                         \
+  template CellGraph<D> banded<D>(const Box<D>&, const levelset::Function<D>&, int, double,                         \
                                   const CellGraphOptions<D>&);                                            \
-  template bool narrow_band_refines<D>(const TreeNode<D>&, const LevelSet<D>&, int, int, double, double); \
-  template Mark narrow_band_mark<D>(const CellGraph<D>&, CellId, const LevelSet<D>&, int, int, double,    \
+  template bool narrow_band_refines<D>(const TreeNode<D>&, const levelset::Function<D>&, int, int, double, double); \
+  template Mark narrow_band_mark<D>(const CellGraph<D>&, CellId, const levelset::Function<D>&, int, int, double,    \
                                     double);                                                              \
-  template CellGraph<D> narrow_band<D>(const Box<D>&, const LevelSet<D>&, int, int, double,               \
+  template CellGraph<D> narrow_band<D>(const Box<D>&, const levelset::Function<D>&, int, int, double,               \
                                        const CellGraphOptions<D>&);                                       \
-  template void mark_narrow_band<D>(const CellGraph<D>&, const LevelSet<D>&, int, int, double,            \
+  template void mark_narrow_band<D>(const CellGraph<D>&, const levelset::Function<D>&, int, int, double,            \
                                     std::vector<Mark>&);                                                  \
   template CellGraph<D> refined<D>(const CellGraph<D>&, int, CellGraphOptions<D>);                        \
   template CellGraph<D> random<D>(const Box<D>&, std::uint64_t, int, int, double, CellGraphOptions<D>);

@@ -11,12 +11,10 @@
 #include <functional>
 #include <vector>
 
+#include "liquid/levelset/levelset.hpp"
 #include "liquid/tree/cell_graph.hpp"
 
 namespace liquid::tree {
-
-template <int Dim>
-using LevelSet = std::function<double(const Vec<Dim>&)>;
 
 /// Every cell at `level` (2^(Dim*level) leaves). options.max_jump is kept for later changes.
 template <int Dim>
@@ -25,24 +23,24 @@ CellGraph<Dim> uniform(const Box<Dim>& domain, int level, const CellGraphOptions
 /// Level `level` everywhere, level + 1 within 2 * band finest cells of phi's zero set and level + 2
 /// within band finest cells (finest = level + 2; band > 0).
 template <int Dim>
-CellGraph<Dim> banded(const Box<Dim>& domain, const LevelSet<Dim>& phi, int level, double band = 3.0,
+CellGraph<Dim> banded(const Box<Dim>& domain, const levelset::Function<Dim>& phi, int level, double band = 3.0,
                       const CellGraphOptions<Dim>& options = {});
 
 /// Level `fine_level` within `band` cells of that level around phi's zero set, as coarse as the
 /// level jump allows elsewhere but never coarser than `coarse_level` (coarse_level <= fine_level).
 template <int Dim>
-CellGraph<Dim> narrow_band(const Box<Dim>& domain, const LevelSet<Dim>& phi, int coarse_level, int fine_level,
+CellGraph<Dim> narrow_band(const Box<Dim>& domain, const levelset::Function<Dim>& phi, int coarse_level, int fine_level,
                            double band = 2.0, const CellGraphOptions<Dim>& options = {});
 
 /// The refinement rule of narrow_band() for one node (true: split it).
 template <int Dim>
-bool narrow_band_refines(const TreeNode<Dim>& node, const LevelSet<Dim>& phi, int coarse_level,
+bool narrow_band_refines(const TreeNode<Dim>& node, const levelset::Function<Dim>& phi, int coarse_level,
                          int fine_level, double band, double fine_size);
 
 /// What the narrow-band rule asks of leaf c: split when it refines c, merge when it would not
 /// refine c's parent, else keep (fine_size: the cell size at fine_level along the longest axis).
 template <int Dim>
-Mark narrow_band_mark(const CellGraph<Dim>& graph, CellId c, const LevelSet<Dim>& phi, int coarse_level,
+Mark narrow_band_mark(const CellGraph<Dim>& graph, CellId c, const levelset::Function<Dim>& phi, int coarse_level,
                       int fine_level, double band, double fine_size);
 
 /// Marks an existing graph towards narrow_band(phi, coarse_level, fine_level, band): split where
@@ -50,7 +48,7 @@ Mark narrow_band_mark(const CellGraph<Dim>& graph, CellId c, const LevelSet<Dim>
 /// `marks` (out) is resized to graph.cell_capacity() and reset first. Uses OpenMP. To re-adapt at
 /// a cost proportional to the band instead, see NarrowBandTracker (band_tracker.hpp).
 template <int Dim>
-void mark_narrow_band(const CellGraph<Dim>& graph, const LevelSet<Dim>& phi, int coarse_level, int fine_level,
+void mark_narrow_band(const CellGraph<Dim>& graph, const levelset::Function<Dim>& phi, int coarse_level, int fine_level,
                       double band, std::vector<Mark>& marks);
 
 /// `base` with every leaf split `extra` times: the tree of the next rows of a convergence study in

@@ -49,8 +49,8 @@ void dirichlet_quadratic_is_exact() {
   const CellGraph<Dim> graph = non_graded<Dim>(Dim == 2 ? 4 : 2);
   PoissonProblem<Dim> problem;
   problem.f = quad_laplacian<Dim>;
-  problem.levelset = levelset::sphere<Dim>(Vec<Dim>::Constant(0.05), 0.7);
-  problem.dirichlet = quad<Dim>;
+  problem.boundary.levelset = levelset::sphere<Dim>(Vec<Dim>::Constant(0.05), 0.7);
+  problem.boundary.dirichlet = quad<Dim>;
   const PoissonSystem<Dim> sys = assemble_poisson<Dim>(graph, problem, PoissonOptions{});
   EXPECT_GT(sys.stats.n_rbf_rows, 0);
   EXPECT_GT(sys.stats.n_fd_rows, 0);
@@ -80,6 +80,75 @@ TEST(Poisson, DirichletQuadraticIsExactOnNonGradedQuadtree) {
 }
 TEST(Poisson, DirichletQuadraticIsExactOnNonGradedOctree) {
   dirichlet_quadratic_is_exact<3>();
+}
+
+// Neumann walls with the flux of a quadratic p (not zero): mirror ghosts carry p + 2 delta dp/dn,
+// a central difference about the wall, so FD and RBF-FD rows beside walls stay exact.
+template <int Dim>
+void inhomogeneous_neumann_quadratic_is_exact() {
+  const CellGraph<Dim> graph = non_graded<Dim>(Dim == 2 ? 4 : 2);
+  PoissonProblem<Dim> problem;
+  problem.f = quad_laplacian<Dim>;
+  problem.pin_value = quad<Dim>;
+  problem.boundary.wall_flux = [](const Vec<Dim>& x, const Vec<Dim>& n) { return quad_gradient<Dim>(x).dot(n); };
+  const PoissonSystem<Dim> sys = assemble_poisson<Dim>(graph, problem, PoissonOptions{});
+  ASSERT_TRUE(sys.singular);
+  EXPECT_NE(sys.pinned, no_cell);
+  linalg::Vector p;
+  const auto st = linalg::solve(sys.A, sys.b, p, {linalg::SolverKind::direct});
+  ASSERT_TRUE(st.converged()) << st.describe();
+  double err = 0.0;
+  for (long i = 0; i < sys.n_unknowns(); ++i)
+    err = std::max(err, std::abs(p[i] - quad<Dim>(graph.centre(sys.layout.cell_of_dof[i]))));
+  EXPECT_LT(err, 1e-8);
+  // Without the flux the same system misses p by O(1): the test can fail.
+  problem.boundary.wall_flux = nullptr;
+  const PoissonSystem<Dim> zero = assemble_poisson<Dim>(graph, problem, PoissonOptions{});
+  linalg::Vector q;
+  ASSERT_TRUE(linalg::solve(zero.A, zero.b, q, {linalg::SolverKind::direct}).converged());
+  double err_zero = 0.0;
+  for (long i = 0; i < zero.n_unknowns(); ++i)
+    err_zero = std::max(err_zero, std::abs(q[i] - quad<Dim>(graph.centre(zero.layout.cell_of_dof[i]))));
+  EXPECT_GT(err_zero, 0.1);
+}
+
+TEST(Poisson, InhomogeneousNeumannQuadraticIsExactOnNonGradedQuadtree) {
+  inhomogeneous_neumann_quadratic_is_exact<2>();
+}
+TEST(Poisson, InhomogeneousNeumannQuadraticIsExactOnNonGradedOctree) {
+  inhomogeneous_neumann_quadratic_is_exact<3>();
+}
+
+TEST(Poisson, LevelSetNegativeEverywhereIsSingularAndPinned) {
+  // No Dirichlet value anywhere: the system is pinned like a pure Neumann one, not left singular.
+  const CellGraph<2> graph = non_graded<2>(3);
+  PoissonProblem<2> problem;
+  problem.f = quad_laplacian<2>;
+  problem.pin_value = quad<2>;
+  problem.boundary.levelset = [](const Vec<2>&) { return -1.0; };
+  problem.boundary.dirichlet = quad<2>;
+  problem.boundary.wall_flux = [](const Vec<2>& x, const Vec<2>& n) { return quad_gradient<2>(x).dot(n); };
+  const PoissonSystem<2> sys = assemble_poisson<2>(graph, problem, PoissonOptions{});
+  EXPECT_TRUE(sys.singular);
+  EXPECT_NE(sys.pinned, no_cell);
+  linalg::Vector p;
+  ASSERT_TRUE(linalg::solve(sys.A, sys.b, p, {linalg::SolverKind::direct}).converged());
+  for (long i = 0; i < sys.n_unknowns(); ++i)
+    EXPECT_NEAR(p[i], quad<2>(graph.centre(sys.layout.cell_of_dof[i])), 1e-8);
+}
+
+TEST(Poisson, NonFiniteRightHandSideNamesTheCell) {
+  const CellGraph<2> graph = non_graded<2>(3);
+  PoissonProblem<2> problem;
+  problem.f = [](const Vec<2>& x) { return std::log(x[0]); };  // NaN for x < 0
+  problem.pin_value = quad<2>;
+  try {
+    (void)assemble_poisson<2>(graph, problem, PoissonOptions{});
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("right-hand side f is nan at the centre"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("of cell"), std::string::npos) << e.what();
+  }
 }
 
 TEST(Poisson, InteriorRowsAreExactForQuadratics) {
@@ -153,8 +222,8 @@ TEST(Poisson, BadInputIsNamed) {
   const CellGraph<2> graph = tree::uniform<2>(Box<2>{Vec<2>::Zero(), Vec<2>::Ones()}, 3);
   PoissonProblem<2> problem;
   problem.f = [](const Vec<2>&) { return 1.0; };
-  problem.levelset = levelset::sphere<2>(Vec<2>(5, 5), 0.1);  // outside the domain
-  problem.dirichlet = [](const Vec<2>&) { return 0.0; };
+  problem.boundary.levelset = levelset::sphere<2>(Vec<2>(5, 5), 0.1);  // outside the domain
+  problem.boundary.dirichlet = [](const Vec<2>&) { return 0.0; };
   try {
     assemble_poisson<2>(graph, problem, PoissonOptions{});
     FAIL() << "no error";
@@ -175,8 +244,8 @@ void dirichlet_walls_quadratic_is_exact() {
   const CellGraph<Dim> graph = non_graded<Dim>(Dim == 2 ? 3 : 2);
   PoissonProblem<Dim> problem;
   problem.f = quad_laplacian<Dim>;
-  problem.dirichlet = quad<Dim>;
-  problem.dirichlet_walls = true;
+  problem.boundary.dirichlet = quad<Dim>;
+  problem.boundary.dirichlet_walls = true;
   const PoissonSystem<Dim> sys = assemble_poisson<Dim>(graph, problem, PoissonOptions{});
   EXPECT_EQ(sys.pinned, no_cell);
   linalg::Vector p;
@@ -263,8 +332,8 @@ TEST(Poisson, WeightCacheChangesOnlyRoundOff) {
 
   PoissonProblem<2> dirichlet;
   dirichlet.f = quad_laplacian<2>;
-  dirichlet.levelset = levelset::sphere<2>(Vec<2>::Zero(), 1.3);
-  dirichlet.dirichlet = quad<2>;
+  dirichlet.boundary.levelset = levelset::sphere<2>(Vec<2>::Zero(), 1.3);
+  dirichlet.boundary.dirichlet = quad<2>;
   check_cache_changes_nothing<2>(dirichlet, non_graded<2>(3, 2.0), false);
 }
 

@@ -3,7 +3,7 @@
 
 #include <cmath>
 
-#include "../../../verification/common/stencils.hpp"
+#include "support/stencils.hpp"
 #include "liquid/core/error.hpp"
 #include "liquid/rbf/interpolant.hpp"
 
@@ -11,7 +11,7 @@ namespace liquid::rbf {
 namespace {
 
 TEST(RbfInterpolant, InterpolatesAtNodesAndReproducesQuadratics3D) {
-  auto nodes = verification::jittered_stencil<3>(1, 0.2, 0.3, 9u);
+  auto nodes = support::jittered_stencil<3>(1, 0.2, 0.3, 9u);
   for (auto& x : nodes) x += Vec<3>(1.0, -2.0, 0.5);  // away from the origin on purpose
   Interpolant<3> interp(nodes, Config{5, 2});
   ASSERT_TRUE(interp.status().usable()) << interp.status().describe();
@@ -34,7 +34,7 @@ TEST(RbfInterpolant, InterpolatesAtNodesAndReproducesQuadratics3D) {
 }
 
 TEST(RbfInterpolant, ErrorsAreExplicit) {
-  const auto nodes = verification::jittered_stencil<2>(1, 0.1, 0.2, 1u);
+  const auto nodes = support::jittered_stencil<2>(1, 0.1, 0.2, 1u);
   Interpolant<2> interp(nodes, Config{5, 2});
   EXPECT_THROW(interp.value(Vec<2>::Zero()), Error);             // not fitted
   EXPECT_THROW(interp.fit(Eigen::MatrixXd::Zero(3, 1)), Error);  // wrong row count

@@ -4,7 +4,7 @@
 
 #include <omp.h>
 
-#include "../../../verification/common/stencils.hpp"
+#include "support/stencils.hpp"
 #include "liquid/core/error.hpp"
 #include "liquid/rbf/weight_cache.hpp"
 
@@ -13,7 +13,7 @@ namespace {
 
 TEST(WeightCache, MatchesUncachedWeightsAndHitsOnRepeatedLayouts) {
   WeightCache<2> cache;
-  const auto base = verification::quadtree_stencil<2>(1, 1.0, 4u);
+  const auto base = support::quadtree_stencil<2>(1, 1.0, 4u);
   const Config config;
   std::vector<double> cached, direct;
   // The same T-junction layout at three levels and two places: one miss, then hits.
@@ -46,7 +46,7 @@ TEST(WeightCache, ConsistentUnderOpenMP) {
   WeightCache<3> cache;
   const int n_layouts = 8;
   std::vector<std::vector<Vec<3>>> layouts;
-  for (int i = 0; i < n_layouts; ++i) layouts.push_back(verification::quadtree_stencil<3>(1, 1.0, 100u + i));
+  for (int i = 0; i < n_layouts; ++i) layouts.push_back(support::quadtree_stencil<3>(1, 1.0, 100u + i));
   const int n_queries = 400;
   std::vector<double> checks(n_queries, 0.0);
 #pragma omp parallel for num_threads(4)
@@ -76,7 +76,7 @@ TEST(WeightCache, UnusableStencilsAreCachedAsUnusable) {
 // differently gives bit-identical weights whichever place is met first. A layout whose offsets are
 // not on the quantum (a cell side a third of another) is computed directly and not stored.
 TEST(WeightCache, EntriesDependOnTheKeyAloneAndOffQuantumStencilsBypass) {
-  const auto base = verification::quadtree_stencil<2>(1, 1.0, 9u);
+  const auto base = support::quadtree_stencil<2>(1, 1.0, 9u);
   const double h = 0.0625 * 3.141592653589793;       // cells of a box of side pi, as on a tree
   const Vec<2> here(0.1, 0.7), there(1234.567, 89.01);  // nodes - at rounds differently
   const auto place = [&](const Vec<2>& at) {

@@ -6,7 +6,7 @@
 
 #include <Eigen/SVD>
 
-#include "../../../verification/common/stencils.hpp"
+#include "support/stencils.hpp"
 #include "liquid/core/error.hpp"
 #include "liquid/rbf/polynomial.hpp"
 #include "liquid/rbf/saddle.hpp"
@@ -39,14 +39,14 @@ double reproduction_error(const std::vector<Vec<Dim>>& nodes, const Vec<Dim>& at
 
 TEST(RbfFdWeights, ReproducePolynomialsOnScatteredStencils2D) {
   for (int m = 0; m <= 4; ++m) {
-    const auto nodes = verification::jittered_stencil<2>(3, 0.01, 0.35, 7u + m);
+    const auto nodes = support::jittered_stencil<2>(3, 0.01, 0.35, 7u + m);
     EXPECT_LT(reproduction_error<2>(nodes, Vec<2>(0.002, -0.001), m, 0.01), 1e-9) << "degree " << m;
   }
 }
 
 TEST(RbfFdWeights, ReproducePolynomialsOnTJunctionStencils3D) {
   for (int m = 0; m <= 4; ++m) {
-    const auto nodes = verification::quadtree_stencil<3>(1, 0.05, 11u + m);
+    const auto nodes = support::quadtree_stencil<3>(1, 0.05, 11u + m);
     ASSERT_GE(static_cast<int>(nodes.size()), 2 * n_polynomial_terms(3, m));
     EXPECT_LT(reproduction_error<3>(nodes, Vec<3>::Zero(), m, 0.05), 1e-9) << "degree " << m;
   }
@@ -67,7 +67,7 @@ TEST(RbfFdWeights, FivePointStencilGivesStandardFiniteDifferences) {
 }
 
 TEST(RbfFdWeights, LinearCombinationEqualsSumOfParts) {
-  const auto nodes = verification::quadtree_stencil<2>(2, 0.1, 3u);
+  const auto nodes = support::quadtree_stencil<2>(2, 0.1, 3u);
   const Vec<2> n(0.6, 0.8);
   const auto op = Operator<2>::lap() * 2.0 + Operator<2>::directional(n) + Operator<2>::identity() * 0.5;
   std::vector<double> w, w_lap, w_dir, w_val;
@@ -140,7 +140,7 @@ TEST(RbfFdWeights, UnusableWeightsThrowWhenCombined) {
 }
 
 TEST(RbfFdWeights, PhsOneRefusesLaplacianAtANode) {
-  const auto nodes = verification::jittered_stencil<2>(2, 0.1, 0.3, 5u);
+  const auto nodes = support::jittered_stencil<2>(2, 0.1, 0.3, 5u);
   std::vector<double> w;
   EXPECT_FALSE(weights<2>(nodes, Vec<2>::Zero(), Operator<2>::lap(), Config{1, 1}, w).usable());
   EXPECT_TRUE(weights<2>(nodes, Vec<2>::Zero(), Operator<2>::partial(1), Config{1, 1}, w).usable());
@@ -157,7 +157,7 @@ namespace {
 // refused: a pair of nodes 1e-7 R apart (above the coincidence test) makes K nearly singular.
 TEST(RbfFdWeights, ConditionEstimateTracksTheTrueOneAndRefusesNearSingularSystems) {
   for (int m : {1, 2, 3}) {
-    auto nodes = verification::jittered_stencil<2>(3, 0.1, 0.3, 11u + m);
+    auto nodes = support::jittered_stencil<2>(3, 0.1, 0.3, 11u + m);
     std::vector<Vec<2>> unit(nodes.size());
     double radius = 0.0;
     for (const auto& x : nodes) radius = std::max(radius, x.norm());

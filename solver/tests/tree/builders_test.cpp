@@ -16,13 +16,13 @@ namespace liquid {
 namespace {
 
 template <int Dim>
-tree::LevelSet<Dim> sphere(const Vec<Dim>& centre, double radius) {
+levelset::Function<Dim> sphere(const Vec<Dim>& centre, double radius) {
   return [centre, radius](const Vec<Dim>& x) { return (x - centre).norm() - radius; };
 }
 
 /// True when phi changes sign over the corners of c's box (so the zero set crosses the cell).
 template <int Dim>
-bool crosses(const CellGraph<Dim>& g, CellId c, const tree::LevelSet<Dim>& phi) {
+bool crosses(const CellGraph<Dim>& g, CellId c, const levelset::Function<Dim>& phi) {
   const Box<Dim> b = g.box(c);
   bool neg = false, pos = false;
   for (int k = 0; k < (1 << Dim); ++k) {

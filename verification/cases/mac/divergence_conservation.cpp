@@ -108,6 +108,6 @@ CaseResult run(const CaseOptions& options) {
 
 LIQUID_VERIFICATION_CASE({"divergence-conservation",
                           "divergence of a face velocity: flux sum against RBF-FD, accuracy and conservation",
-                          true, run});
+                          true, run, no_options});
 
 }  // namespace liquid::verification

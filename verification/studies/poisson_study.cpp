@@ -1,4 +1,4 @@
-#include "poisson_study.hpp"
+#include "studies/poisson_study.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -7,7 +7,7 @@
 
 #include <fmt/format.h>
 
-#include "fit.hpp"
+#include "common/fit.hpp"
 #include "liquid/core/error.hpp"
 #include "liquid/core/timer.hpp"
 #include "liquid/tree/builders.hpp"
@@ -36,7 +36,7 @@ std::string describe_cell(const CellGraph<Dim>& graph, const PoissonStudy<Dim>& 
 template <int Dim>
 CellGraph<Dim> row_tree(const PoissonStudy<Dim>& study, const CellGraph<Dim>& first, int level,
                         const CellGraphOptions<Dim>& options) {
-  if (!study.self_similar) return study.make_tree(level, options);
+  if (study.rows == RowProtocol::rebuild) return study.make_tree(level, options);
   return tree::refined<Dim>(first, level - study.level_min, options);
 }
 
@@ -44,10 +44,15 @@ template <int Dim>
 PoissonRun solve_poisson(const CellGraph<Dim>& graph, const PoissonStudy<Dim>& study) {
   mac::PoissonProblem<Dim> problem;
   problem.f = study.laplacian;
-  problem.levelset = study.levelset;
-  problem.dirichlet = study.exact;
-  problem.dirichlet_walls = study.dirichlet_walls;
+  problem.boundary.levelset = study.levelset;
+  problem.boundary.dirichlet = study.exact;
+  problem.boundary.dirichlet_walls = study.dirichlet_walls;
   problem.pin_value = study.exact;
+  if (!study.dirichlet_walls) {
+    // Neumann walls carry the exact solution's flux, so any smooth p converges (zero for the paper's).
+    const auto gradient = study.gradient;
+    problem.boundary.wall_flux = [gradient](const Vec<Dim>& x, const Vec<Dim>& n) { return gradient(x).dot(n); };
+  }
   const mac::PoissonSystem<Dim> system = mac::assemble_poisson<Dim>(graph, problem, study.discretisation);
 
   PoissonRun run;
@@ -77,6 +82,16 @@ PoissonRun solve_poisson(const CellGraph<Dim>& graph, const PoissonStudy<Dim>& s
     if (e > run.err_p || worst_cell == no_cell) run.err_p = e, worst_cell = cells[i];
   }
   run.worst_p = describe_cell(graph, study, worst_cell);
+  std::vector<std::pair<long, double>> by_level;
+  for (std::size_t i = 0; i < cells.size(); ++i) {
+    const int l = graph.level(cells[i]);
+    if (static_cast<int>(by_level.size()) <= l) by_level.resize(l + 1, {0, 0.0});
+    by_level[l].first += 1;
+    by_level[l].second =
+        std::max(by_level[l].second, std::abs(x[i] - shift - study.exact(graph.centre(cells[i]))));
+  }
+  for (int l = 0; l < static_cast<int>(by_level.size()); ++l)
+    if (by_level[l].first > 0) run.err_by_level.emplace_back(l, by_level[l].first, by_level[l].second);
 
   const std::vector<double> dpdn = mac::face_normal_derivative<Dim>(graph, system, study.discretisation, x);
   FaceId worst_face = no_face;
@@ -119,59 +134,45 @@ Json series_entry(const std::string& group, const std::string& label, const std:
 
 template <int Dim>
 CaseResult run_poisson_study(PoissonStudy<Dim> study, const CaseOptions& options) {
-  if (options.level_min) study.level_min = *options.level_min;
-  if (options.level_max) study.level_max = *options.level_max;
+  if (options.levels) study.level_min = options.levels->first, study.level_max = options.levels->last;
   if (options.max_jump) study.max_jump = *options.max_jump;
-  if (options.solver) study.solver.kind = linalg::parse_solver(*options.solver);
-  if (options.stencil) study.discretisation.rule = mac::parse_stencil_rule(*options.stencil);
-  if (options.rbf_exponent) {
-    LIQUID_VERIFY(*options.rbf_exponent % 2 == 1 && *options.rbf_exponent <= 9,
-                  "--rbf-exponent must be odd and at most 9, got {}", *options.rbf_exponent);
-    study.discretisation.rbf.exponent = *options.rbf_exponent;
-  }
-  for (auto [given, target, flag] :
-       {std::tuple{options.rbf_degree, &study.discretisation.rbf.degree, "--rbf-degree"},
-        std::tuple{options.gradient_degree, &study.discretisation.gradient_degree, "--gradient-degree"}}) {
-    if (!given) continue;
-    LIQUID_VERIFY(*given >= 0 && *given <= 4, "{} must be in 0..4, got {}", flag, *given);
-    *target = *given;
-  }
-  if (options.stencil_growth) {
-    LIQUID_VERIFY(*options.stencil_growth >= 1.0 && *options.stencil_growth <= 8.0,
-                  "--stencil-growth must be in 1..8, got {}", *options.stencil_growth);
-    study.discretisation.growth = *options.stencil_growth;
-  }
-  if (options.rows) {
-    LIQUID_VERIFY(*options.rows == "rebuild" || *options.rows == "refine",
-                  "--rows: choose rebuild or refine, got '{}'", *options.rows);
-    study.self_similar = *options.rows == "refine";
-  }
+  if (options.solver) study.solver.kind = *options.solver;
+  if (options.stencil) study.discretisation.rule = *options.stencil;
+  if (options.rbf_exponent) study.discretisation.rbf.exponent = *options.rbf_exponent;
+  if (options.rbf_degree) study.discretisation.rbf.degree = *options.rbf_degree;
+  if (options.gradient_degree) study.discretisation.gradient_degree = *options.gradient_degree;
+  if (options.stencil_growth) study.discretisation.growth = *options.stencil_growth;
+  if (options.rows) study.rows = *options.rows;
   if (options.nullspace) {
     LIQUID_VERIFY(!study.levelset && !study.dirichlet_walls,
                   "--nullspace applies to pure Neumann problems; this study has Dirichlet values{}, so "
                   "its system is not singular",
                   study.levelset ? " on a level set" : " on its walls");
-    LIQUID_VERIFY(*options.nullspace == "pin" || *options.nullspace == "zero-mean",
-                  "--nullspace: choose pin or zero-mean, got '{}'", *options.nullspace);
-    study.discretisation.nullspace =
-        *options.nullspace == "pin" ? mac::Nullspace::pin : mac::Nullspace::zero_mean;
+    study.discretisation.nullspace = *options.nullspace;
   }
-  if (options.tolerance) {
-    LIQUID_VERIFY(*options.tolerance > 0.0 && *options.tolerance < 1.0,
-                  "--tolerance must be in (0, 1), got {}", *options.tolerance);
-    study.solver.tolerance = *options.tolerance;
-  }
+  if (options.tolerance) study.solver.tolerance = *options.tolerance;
   if (options.perturb) {
     // A deliberately inconsistent scheme for showing that the gate catches regressions: degree-1
     // polynomials cannot reproduce the Laplacian of quadratics at T-junctions.
-    LIQUID_VERIFY(*options.perturb == "first-order", "--perturb: only 'first-order' is known, got '{}'",
-                  *options.perturb);
     study.discretisation.rbf.degree = 1;
   }
   LIQUID_VERIFY(study.level_min >= 0 && study.level_max + study.finest_offset <= morton::max_level<Dim>,
                 "--levels {}:{} out of range for {}D (finest level at most {})", study.level_min,
                 study.level_max, Dim, morton::max_level<Dim> - study.finest_offset);
+  LIQUID_VERIFY(study.level_min < study.level_max,
+                "--levels {}:{}: a convergence study needs at least two rows (A < B)", study.level_min,
+                study.level_max);
   LIQUID_VERIFY(study.max_jump >= 1, "--max-jump must be at least 1, got {}", study.max_jump);
+  // Every cell of a row sits at its base level or finer, so 2^(Dim * base) bounds its cells from
+  // below: refuse before building anything that large.
+  if (options.max_cells > 0) {
+    const double lower = std::ldexp(1.0, Dim * study.level_max);
+    LIQUID_VERIFY(lower <= double(options.max_cells),
+                  "--levels {}:{}: the row at base level {} has at least {:.3g} cells, over the budget of {} "
+                  "cells (--max-cells N raises it)",
+                  study.level_min, study.level_max, study.level_max, lower, options.max_cells);
+  }
+  study.max_cells = options.max_cells;
 
   CaseResult result;
   CellGraphOptions<Dim> tree_options;
@@ -179,6 +180,8 @@ CaseResult run_poisson_study(PoissonStudy<Dim> study, const CaseOptions& options
   Table adaptive("adaptive tree (FD where regular, RBF-FD at T-junctions)",
                  {"level", "h", "unknowns", "rbf rows", "jump", "err p", "order p", "err dp/dn",
                   "order dp/dn", "assembly s", "solve s", "iterations"});
+  Table levels("where the error lives: L-inf error of p on the unknowns of each cell level",
+               {"row", "cell level", "unknowns", "err p", "share of row err"});
   Table uniform("uniform grid at the same finest h",
                 {"level", "h", "unknowns", "err p", "err dp/dn", "assembly s", "solve s", "iterations"});
   std::vector<double> hs, ep, eg, nd, uh, uep, ueg, at, ut;  // at/ut: time to solution
@@ -200,10 +203,25 @@ CaseResult run_poisson_study(PoissonStudy<Dim> study, const CaseOptions& options
                     level, run.worst_p, run.worst_grad, run.assembly.n_cache_hits, run.assembly.n_rbf_rows));
     result.expect(std::isfinite(run.err_p) && std::isfinite(run.err_grad),
                   fmt::format("level {}: NaN error", level));
+    for (const auto& [l, n, e] : run.err_by_level)
+      levels.add_row({long(level), long(l), n, e, run.err_p > 0.0 ? Table::Cell(e / run.err_p) : Table::Cell{}});
+    if (k > 0) {
+      result.expect(run.h < hs[k - 1], fmt::format("level {}: its finest h {:.4g} is not below the previous "
+                                                   "row's ({:.4g}): the rows are not a refinement sequence",
+                                                   level, run.h, hs[k - 1]));
+      if (!(run.err_p < ep[k - 1]) && ep[k - 1] >= exact_error_level)
+        result.warnings.push_back(fmt::format(
+            "level {}: the error of p ({:.3e}) did not fall from the row before ({:.3e}); the study is not "
+            "in its asymptotic range there{}",
+            level, run.err_p, ep[k - 1],
+            study.rows == RowProtocol::rebuild ? " (rows rebuilt per level are not nested: try --rows refine)"
+                                               : ""));
+    }
 
     const int fine = level + study.finest_offset;
     const double limit = options.full ? 4.0 * study.uniform_limit : study.uniform_limit;
     if (std::pow(2.0, Dim * fine) > limit) return;
+    if (study.max_cells > 0 && std::pow(2.0, Dim * fine) > double(study.max_cells)) return;
     const CellGraph<Dim> flat = tree::uniform<Dim>(study.domain, fine, tree_options);
     const PoissonRun u = solve_poisson<Dim>(flat, study);
     if (!u.solve.converged()) return;
@@ -214,6 +232,19 @@ CaseResult run_poisson_study(PoissonStudy<Dim> study, const CaseOptions& options
   });
   result.tables.push_back(std::move(adaptive));
   result.tables.push_back(std::move(uniform));
+  result.tables.push_back(std::move(levels));
+  // Per-step orders that spread by more than 0.5 mean a pre-asymptotic study: the fit is not an order.
+  if (hs.size() >= 3 && *std::min_element(ep.begin(), ep.end()) >= exact_error_level) {
+    std::vector<double> steps;
+    for (std::size_t k = 1; k < hs.size(); ++k) steps.push_back(pair_order(hs[k - 1], ep[k - 1], hs[k], ep[k]));
+    const auto [lo, hi] = std::minmax_element(steps.begin(), steps.end());
+    if (*hi - *lo > 0.5)
+      result.warnings.push_back(fmt::format(
+          "the per-step orders of p spread from {:.2f} (rows {} to {}) to {:.2f} (rows {} to {}): the study is "
+          "pre-asymptotic, and its fitted order is not yet the scheme's",
+          *lo, study.level_min + (lo - steps.begin()), study.level_min + (lo - steps.begin()) + 1, *hi,
+          study.level_min + (hi - steps.begin()), study.level_min + (hi - steps.begin()) + 1));
+  }
 
   const double order = fit_order(hs, ep), order_grad = fit_order(hs, eg);
   // Against unknowns: err ~ N^(-q/Dim), so q = -Dim * slope of log err against log N.
@@ -229,10 +260,17 @@ CaseResult run_poisson_study(PoissonStudy<Dim> study, const CaseOptions& options
   const auto at_roundoff = [](const std::vector<double>& e) {
     return !e.empty() && *std::max_element(e.begin(), e.end()) < exact_error_level;
   };
+  result.asserted = study.asserted;
+  if (study.error_ceiling && !ep.empty())
+    result.expect(ep.back() <= *study.error_ceiling,
+                  fmt::format("the finest row's error of p {:.3e} is above the expected {:.3e}", ep.back(),
+                              *study.error_ceiling));
   if (at_roundoff(ep) && at_roundoff(eg)) {
     result.notes.push_back(
         fmt::format("every error is below {:.0e}: the scheme is exact for this p", exact_error_level));
   } else {
+    result.expect(std::isfinite(order) && std::isfinite(order_grad),
+                  "the fitted orders are not finite (rows with equal errors or h)");
     result.expect(order >= study.order_floor,
                   fmt::format("order of p {:.2f} below the floor {:.2f}", order, study.order_floor));
     result.expect(
@@ -246,7 +284,7 @@ CaseResult run_poisson_study(PoissonStudy<Dim> study, const CaseOptions& options
       order, order_grad, Dim, order_dofs, linalg::to_string(study.solver.kind), study.solver.tolerance,
       mac::to_string(study.discretisation.rule), study.discretisation.growth,
       study.discretisation.rbf.exponent, study.discretisation.rbf.degree,
-      study.self_similar ? "refine the first tree" : "rebuilt per level",
+      study.rows == RowProtocol::refine ? "refine the first tree" : "rebuilt per level",
       study.levelset || study.dirichlet_walls ? ""
       : study.discretisation.nullspace == mac::Nullspace::pin
           ? "; singular Neumann system: one unknown pinned near the centre"
@@ -278,6 +316,14 @@ std::vector<PoissonRun> solve_rows(const PoissonStudy<Dim>& study, CaseResult& r
   options.max_jump = study.max_jump;
   const CellGraph<Dim> first = study.make_tree(study.level_min, options);
   const std::string prefix = label.empty() ? "" : label + " ";
+  if (study.max_cells > 0) {
+    // Each row splits (or rebuilds at one level finer) about every cell of the one before.
+    const double estimate = double(first.n_cells()) * std::ldexp(1.0, Dim * (study.level_max - study.level_min));
+    LIQUID_VERIFY(estimate <= double(study.max_cells),
+                  "--levels {}:{}: the first row has {} cells, so the row at base level {} would have about "
+                  "{:.3g}, over the budget of {} cells (--max-cells N raises it)",
+                  study.level_min, study.level_max, first.n_cells(), study.level_max, estimate, study.max_cells);
+  }
   std::vector<PoissonRun> runs;
   for (int level = study.level_min; level <= study.level_max; ++level) {
     // The first row solves `first` itself: no second build, no copy.

@@ -7,7 +7,7 @@
 
 #include "liquid/core/types.hpp"
 
-namespace liquid::verification {
+namespace liquid::support {
 
 /// The integer offsets of a (2 * half + 1)^Dim block around the origin, axis 0 fastest.
 template <int Dim>
@@ -70,4 +70,4 @@ std::vector<Vec<Dim>> quadtree_stencil(int half, double h, unsigned seed) {
   return nodes;
 }
 
-}  // namespace liquid::verification
+}  // namespace liquid::support

@@ -25,9 +25,9 @@
 
 #include <algorithm>
 
-#include "cases/paper_studies.hpp"
+#include "studies/paper_studies.hpp"
 #include "common/fit.hpp"
-#include "common/poisson_study.hpp"
+#include "studies/poisson_study.hpp"
 #include "liquid/core/error.hpp"
 
 namespace liquid::verification {
@@ -46,7 +46,7 @@ void compare(const Setting& setting, const CaseOptions& options, Table& table, C
   for (int degree : {2, 3}) {
     PoissonStudy<Dim> s = setting.neumann ? neumann_study<Dim>(false) : dirichlet_study<Dim>(false);
     s.discretisation.rbf.degree = degree;
-    s.self_similar = true;
+    s.rows = RowProtocol::refine;
     const int level_min = options.full ? setting.full_min : setting.quick_min;
     const int level_max = options.full ? setting.full_max : setting.quick_max;
     const bool asserted = options.full ? setting.asserted_full : setting.asserted_quick;
@@ -81,7 +81,6 @@ void compare(const Setting& setting, const CaseOptions& options, Table& table, C
 }
 
 CaseResult run(const CaseOptions& options) {
-  refuse_study_options(options, "poisson-rbf-degree", "it fixes its own studies, levels and degrees", true);
   CaseResult result;
   Table table(
       "RBF-FD Laplacian rows with polynomials of degree 2 and 3, rows by recursive subdivision "
@@ -109,6 +108,7 @@ CaseResult run(const CaseOptions& options) {
 
 LIQUID_VERIFICATION_CASE(
     {"poisson-rbf-degree",
-     "the paper's Poisson studies with RBF-FD rows of polynomial degree 2 and 3, side by side", true, run});
+     "the paper's Poisson studies with RBF-FD rows of polynomial degree 2 and 3, side by side", true, run,
+     no_options});
 
 }  // namespace liquid::verification

@@ -20,10 +20,11 @@
 
 #include <fmt/format.h>
 
-#include "common/poisson_study.hpp"
+#include "studies/poisson_study.hpp"
 #include "liquid/core/error.hpp"
 #include "liquid/levelset/levelset.hpp"
 #include "liquid/tree/builders.hpp"
+#include "support/manufactured.hpp"
 
 namespace liquid::verification {
 namespace {
@@ -34,11 +35,7 @@ constexpr double pi = std::numbers::pi;
 PoissonStudy<2> neumann(const Box<2>& domain) {
   PoissonStudy<2> s;
   s.domain = domain;
-  s.exact = [](const Vec<2>& x) { return std::cos(x[0]) * std::cos(x[1]) - 1.0; };
-  s.gradient = [](const Vec<2>& x) {
-    return Vec<2>(-std::sin(x[0]) * std::cos(x[1]), -std::cos(x[0]) * std::sin(x[1]));
-  };
-  s.laplacian = [](const Vec<2>& x) { return -2.0 * std::cos(x[0]) * std::cos(x[1]); };
+  s.use(support::cosine_product<2>());
   return s;
 }
 
@@ -46,20 +43,14 @@ PoissonStudy<2> neumann(const Box<2>& domain) {
 PoissonStudy<2> neumann_x(const Box<2>& domain) {
   PoissonStudy<2> s;
   s.domain = domain;
-  s.exact = [](const Vec<2>& x) { return std::cos(x[0]) - 1.0; };
-  s.gradient = [](const Vec<2>& x) { return Vec<2>(-std::sin(x[0]), 0.0); };
-  s.laplacian = [](const Vec<2>& x) { return -std::cos(x[0]); };
+  s.use(support::cosine_x<2>());
   return s;
 }
 
 PoissonStudy<2> dirichlet_circle(double radius) {
   PoissonStudy<2> s;
   s.domain = Box<2>{Vec<2>::Zero(), Vec<2>::Constant(pi)};
-  s.exact = [](const Vec<2>& x) { return std::exp(x[0]) * std::sin(x[1]) + 1.0; };
-  s.gradient = [](const Vec<2>& x) {
-    return Vec<2>(std::exp(x[0]) * std::sin(x[1]), std::exp(x[0]) * std::cos(x[1]));
-  };
-  s.laplacian = [](const Vec<2>&) { return 0.0; };
+  s.use(support::exp_sin());
   s.levelset = levelset::sphere<2>(Vec<2>::Constant(0.5 * pi), radius);
   return s;
 }
@@ -72,11 +63,8 @@ struct Scenario {
 };
 
 CaseResult run(const CaseOptions& options) {
-  // The scenarios fix their own jumps, solver and scheme; an option they would ignore is refused.
-  refuse_study_options(
-      options, "poisson-hard",
-      "its scenarios fix their own trees, jumps and scheme (only --levels A:B sets the base level A)");
-  const int L = options.level_min.value_or(options.full ? 6 : 5);
+  // The scenarios fix their own jumps, solver and scheme (only --levels A:B sets the base level A).
+  const int L = options.levels ? options.levels->first : (options.full ? 6 : 5);
   const Box<2> square{Vec<2>::Zero(), Vec<2>::Constant(pi)};
   std::vector<Scenario> scenarios;
   for (std::uint64_t seed : {11u, 12u}) {
@@ -169,6 +157,6 @@ CaseResult run(const CaseOptions& options) {
 LIQUID_VERIFICATION_CASE(
     {"poisson-hard",
      "stability: jumps 3-4, random trees, interface 1e-6 h from a centre, near-collinear stencils", true,
-     run});
+     run, {Option::levels}});
 
 }  // namespace liquid::verification

@@ -5,12 +5,16 @@
 // then repeat on a uniform grid of the same finest h, so error and time sit side by side.
 
 #include <functional>
+#include <optional>
 #include <string>
+#include <tuple>
+#include <vector>
 
-#include "case.hpp"
+#include "common/case.hpp"
 #include "liquid/linalg/solver.hpp"
 #include "liquid/mac/poisson.hpp"
 #include "liquid/tree/cell_graph.hpp"
+#include "support/manufactured.hpp"
 
 namespace liquid::verification {
 
@@ -28,28 +32,39 @@ struct PoissonStudy {
   bool dirichlet_walls = false;                       ///< walls carry p (else Neumann)
   /// The adaptive tree of one row, by its base level.
   std::function<CellGraph<Dim>(int level, const CellGraphOptions<Dim>& options)> make_tree;
-  /// false (--rows rebuild): make_tree per row, so band widths counted in finest cells halve with h.
-  /// true (--rows refine): only the first row calls make_tree; every later row is that tree with
-  /// each leaf split once more (the paper's recursive subdivision), so the refined regions and the
-  /// T-junctions stay where they are and each row is a true refinement of the one before.
-  bool self_similar = false;         ///< the paper studies set it
+  /// rebuild: make_tree per row, so band widths counted in finest cells halve with h.
+  /// refine: only the first row calls make_tree; every later row is that tree with each leaf split
+  /// once more (the paper's recursive subdivision), so the refined regions and the T-junctions stay
+  /// where they are and each row is a true refinement of the one before.
+  RowProtocol rows = RowProtocol::refine;
   int level_min = 3, level_max = 5;  ///< base levels of the rows (CaseOptions::level_* override)
   int finest_offset = 2;             ///< finest level = base level + this
   int max_jump = 2;
   mac::PoissonOptions discretisation;
   linalg::SolveOptions solver{linalg::SolverKind::bicgstab_ilut, 1e-10, 20000};
   double order_floor = 1.9, order_grad_floor = 1.8;
+  std::optional<double> error_ceiling;  ///< the finest row's L-inf error of p must not exceed it
+  bool asserted = true;                 ///< false: a user's study without expectations
+  long max_cells = 0;                   ///< refuse rows estimated above this many cells (0: no limit)
   long uniform_limit = 300000;  ///< skip the uniform comparison rows above this many cells (quick tier)
+
+  /// Takes p, grad p and f = Lap p from a manufactured solution.
+  void use(const support::Manufactured<Dim>& m) {
+    exact = m.p;
+    gradient = m.gradient;
+    laplacian = m.laplacian;
+  }
 };
 
 /// Runs the study, fills the tables, records expectations and the top-level fields
 /// ("order", "order_grad", "order_dofs", "series"). Options from the command line override the
-/// study's levels, jump limit and solver.
+/// study's levels, jump limit, solver and scheme; a study refuses rows whose finest tree would
+/// exceed options.max_cells before it builds anything that large.
 template <int Dim>
 CaseResult run_poisson_study(PoissonStudy<Dim> study, const CaseOptions& options);
 
 /// The tree of the row at base level `level`; `first` is make_tree(level_min) (used when the study
-/// is self-similar).
+/// refines its first row).
 template <int Dim>
 CellGraph<Dim> row_tree(const PoissonStudy<Dim>& study, const CellGraph<Dim>& first, int level,
                         const CellGraphOptions<Dim>& options);
@@ -63,6 +78,8 @@ struct PoissonRun {
   linalg::SolveStats solve;
   mac::AssemblyStats assembly;
   int max_level_jump = 0;
+  /// Where the error lives: per cell level, the unknowns there and the L-inf error of p on them.
+  std::vector<std::tuple<int, long, double>> err_by_level;
   std::string worst_p;     ///< where the L-inf of p is reached: centre, level, distance to S in cells
   std::string worst_grad;  ///< where the L-inf of dp/dn is reached: face centre, side levels, FD or RBF-FD
 };

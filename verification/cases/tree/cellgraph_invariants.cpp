@@ -124,8 +124,8 @@ CaseResult run(const CaseOptions& options) {
     LIQUID_VERIFY(k >= 0, "cellgraph-invariants: --max-jump must be non-negative (got {})", k);
     jumps = {k == 0 || k >= 64 ? unlimited_jump : k};
   }
-  const int first = options.level_min.value_or(2);
-  const int last = options.level_max.value_or(7);
+  const int first = options.levels ? options.levels->first : 2;
+  const int last = options.levels ? options.levels->last : 7;
   LIQUID_VERIFY(first >= 0 && last >= first + 1 && last <= 20,
                 "cellgraph-invariants: --levels {}:{} needs 0 <= A < B <= 20", first, last);
   const int n_steps = options.full ? 100 : 25;
@@ -164,7 +164,8 @@ CaseResult run(const CaseOptions& options) {
 
 LIQUID_VERIFICATION_CASE(
     {"cellgraph-invariants",
-     "Cellgraph invariants on random non-graded trees, 2D and 3D, every level-jump limit", true, run, true});
+     "Cellgraph invariants on random non-graded trees, 2D and 3D, every level-jump limit", true, run,
+     {Option::levels, Option::max_jump, Option::trees}});
 
 }  // namespace
 }  // namespace liquid::verification

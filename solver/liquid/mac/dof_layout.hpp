@@ -1,0 +1,26 @@
+#pragma once
+// The numbering of a Poisson problem's unknowns: which cells carry one, and its index.
+
+#include <vector>
+
+#include "liquid/levelset/levelset.hpp"
+#include "liquid/tree/cell_graph.hpp"
+
+namespace liquid::mac {
+
+template <int Dim>
+struct DofLayout {
+  std::vector<int> dof_of_cell;  ///< per cell id: unknown index, or -1
+  std::vector<CellId> cell_of_dof;
+
+  long n_unknowns() const { return static_cast<long>(cell_of_dof.size()); }
+  bool is_unknown(CellId c) const { return dof_of_cell[c] >= 0; }
+};
+
+/// Unknowns at the cells whose centre has inside(centre) < 0, or at every cell when `inside` is
+/// empty, numbered in the graph's cell order. Throws liquid::Error naming the cell where `inside` is
+/// not finite, and when no cell is inside.
+template <int Dim>
+DofLayout<Dim> number_unknowns(const CellGraph<Dim>& graph, const levelset::Function<Dim>& inside);
+
+}  // namespace liquid::mac

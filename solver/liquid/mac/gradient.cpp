@@ -1,0 +1,63 @@
+#include "liquid/mac/gradient.hpp"
+
+#include <algorithm>
+#include <limits>
+
+#include "liquid/core/error.hpp"
+#include "liquid/core/parallel.hpp"
+#include "liquid/rbf/weight_cache.hpp"
+
+namespace liquid::mac {
+
+template <int Dim>
+std::vector<double> face_normal_derivative(const CellGraph<Dim>& graph, const DofLayout<Dim>& layout,
+                                           const Boundary<Dim>& boundary, const PoissonOptions& options,
+                                           const linalg::Vector& p) {
+  LIQUID_VERIFY(p.size() >= layout.n_unknowns(), "face_normal_derivative: {} values for {} unknowns", p.size(),
+                layout.n_unknowns());
+  std::vector<double> out(graph.face_capacity(), std::numeric_limits<double>::quiet_NaN());
+  const std::vector<FaceId> faces = graph.face_ids();
+  rbf::Config config = options.rbf;
+  config.degree = options.gradient_degree;
+  const int n_target = stencil_size(Dim, config.degree, options.growth);
+  rbf::WeightCache<Dim> weight_cache;
+  rbf::WeightCache<Dim>* const cache = options.cache_weights ? &weight_cache : nullptr;
+  parallel_for(
+      static_cast<long>(faces.size()), [] { return RowScratch<Dim>{}; },
+      [&](RowScratch<Dim>& scratch, long q) {
+        const FaceId f = faces[q];
+        const GraphFace& g = graph.face(f);
+        if (g.is_boundary()) return;
+        const int ia = layout.dof_of_cell[g.cell[0]], ib = layout.dof_of_cell[g.cell[1]];
+        if (ia < 0 || ib < 0) return;
+        if (!g.hanging() && g.side_level[0] == g.side_level[1]) {
+          out[f] = (p[ib] - p[ia]) / graph.cell_size(g.cell[0])[g.axis];
+          return;
+        }
+        const Vec<Dim> at = graph.face_centre(f);
+        const CellId seeds[2] = {g.cell[0], g.cell[1]};
+        auto& nodes = scratch.nodes;
+        gather_stencil<Dim>(graph, layout, boundary, seeds, at, options.rule, n_target, nodes);
+        const rbf::Status st =
+            stencil_weights<Dim>(nodes, at, rbf::Operator<Dim>::partial(g.axis), config, scratch.w,
+                                 scratch.n_retried, cache_for<Dim>(nodes, boundary, cache),
+                                 std::min(graph.cell_size(g.cell[0])[0], graph.cell_size(g.cell[1])[0]));
+        LIQUID_VERIFY(st.usable(), "face {} between cells {} and {}: RBF-FD gradient weights unusable: {}", f,
+                      g.cell[0], g.cell[1], st.describe());
+        double v = 0.0;
+        for (std::size_t j = 0; j < nodes.size(); ++j)
+          v += scratch.w[j] * ((nodes[j].dof >= 0 ? p[nodes[j].dof] : 0.0) + nodes[j].value);
+        out[f] = v;
+      },
+      [](RowScratch<Dim>&) {});
+  return out;
+}
+
+template std::vector<double> face_normal_derivative<2>(const CellGraph<2>&, const DofLayout<2>&,
+                                                       const Boundary<2>&, const PoissonOptions&,
+                                                       const linalg::Vector&);
+template std::vector<double> face_normal_derivative<3>(const CellGraph<3>&, const DofLayout<3>&,
+                                                       const Boundary<3>&, const PoissonOptions&,
+                                                       const linalg::Vector&);
+
+}  // namespace liquid::mac

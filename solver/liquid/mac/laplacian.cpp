@@ -1,0 +1,128 @@
+#include "liquid/mac/laplacian.hpp"
+
+#include <cmath>
+
+#include <fmt/format.h>
+
+#include "liquid/core/error.hpp"
+
+namespace liquid::mac {
+
+template <int Dim>
+bool regular_neighbourhood(const CellGraph<Dim>& graph, CellId c) {
+  for (int k = 0; k < Dim; ++k)
+    for (int dir : {-1, 1}) {
+      int n_faces = 0;
+      bool ok = true;
+      graph.for_each_side_face(c, k, dir, [&](const SideFace& s) {
+        ++n_faces;
+        ok = ok && (s.adjacency == Adjacency::same || s.adjacency == Adjacency::boundary);
+      });
+      if (n_faces != 1 || !ok) return false;
+    }
+  return true;
+}
+
+template <int Dim>
+RowKind fd_row(const CellGraph<Dim>& graph, const DofLayout<Dim>& layout, const Boundary<Dim>& boundary, CellId c,
+               Row& row) {
+  const int i = layout.dof_of_cell[c];
+  const Vec<Dim> x = graph.centre(c);
+  const Vec<Dim> h = graph.cell_size(c);
+  double diag = 0.0;
+  for (int k = 0; k < Dim; ++k) {
+    // Per side: distance to the node, the node (an unknown or -1), and its known part.
+    double d[2];
+    int dof[2];
+    double val[2];
+    for (int s = 0; s < 2; ++s) {
+      const int dir = s == 0 ? -1 : 1;
+      d[s] = h[k];
+      dof[s] = i;
+      val[s] = 0.0;
+      graph.for_each_side_face(c, k, dir, [&](const SideFace& sf) {
+        if (sf.adjacency == Adjacency::boundary) {
+          Vec<Dim> w = x;
+          w[k] = dir < 0 ? graph.domain().lo[k] : graph.domain().hi[k];
+          if (!boundary.dirichlet_walls) {
+            // Neumann: the ghost mirrors the centre, p_ghost = p_c + h dp/dn at the wall.
+            val[s] = h[k] * boundary.flux(w, k, dir);
+            return;
+          }
+          d[s] = 0.5 * h[k];
+          dof[s] = -1;
+          val[s] = boundary.dirichlet(w);
+          return;
+        }
+        const int j = layout.dof_of_cell[sf.neighbour];
+        if (j >= 0) {
+          dof[s] = j;
+          return;
+        }
+        const Vec<Dim> y = graph.centre(sf.neighbour);
+        const auto cut =
+            levelset::crossing<Dim>(boundary.levelset, x, y, boundary.levelset(x), boundary.levelset(y));
+        LIQUID_VERIFY(cut.has_value(), "cell {}: no interface crossing towards outside neighbour {}", c,
+                      sf.neighbour);
+        d[s] = cut->theta * h[k];
+        dof[s] = -1;
+        val[s] = boundary.dirichlet(cut->point);
+      });
+    }
+    for (int s = 0; s < 2; ++s) {
+      if (dof[s] < 0 && d[s] <= 1e-12 * h[k]) {  // the centre is on the interface
+        row.entries = {{i, 1.0}};
+        row.rhs = val[s];
+        return RowKind::on_interface;
+      }
+    }
+    const double scale = 2.0 / (d[0] + d[1]);
+    for (int s = 0; s < 2; ++s) {
+      const double w = scale / d[s];
+      diag += w;
+      if (dof[s] >= 0) row.entries.emplace_back(dof[s], -w);
+      row.rhs += w * val[s];
+    }
+  }
+  row.entries.emplace_back(i, diag);
+  return RowKind::fd;
+}
+
+template <int Dim>
+RowKind rbf_row(const CellGraph<Dim>& graph, const DofLayout<Dim>& layout, const Boundary<Dim>& boundary, CellId c,
+                const PoissonOptions& options, rbf::WeightCache<Dim>* cache, RowScratch<Dim>& scratch, Row& row,
+                rbf::Status& status) {
+  const int i = layout.dof_of_cell[c];
+  const Vec<Dim> x = graph.centre(c);
+  const CellId seed[1] = {c};
+  auto& nodes = scratch.nodes;
+  gather_stencil<Dim>(graph, layout, boundary, seed, x, options.rule,
+                      stencil_size(Dim, options.rbf.degree, options.growth), nodes);
+  const double near = 1e-3 * graph.cell_size(c).maxCoeff();
+  for (const auto& nd : nodes)
+    if (nd.dof < 0 && (nd.x - x).norm() < near) {
+      row.entries = {{i, 1.0}};
+      row.rhs = nd.value;
+      return RowKind::on_interface;
+    }
+  status = stencil_weights<Dim>(nodes, x, rbf::Operator<Dim>::lap(), options.rbf, scratch.w, scratch.n_retried,
+                                cache_for<Dim>(nodes, boundary, cache), graph.cell_size(c)[0]);
+  LIQUID_VERIFY(status.usable(), "cell {} at ({:.6g}): RBF-FD Laplacian weights unusable: {}", c,
+                fmt::join(x.data(), x.data() + Dim, ", "), status.describe());
+  for (std::size_t j = 0; j < nodes.size(); ++j) {
+    if (nodes[j].dof >= 0) row.entries.emplace_back(nodes[j].dof, -scratch.w[j]);
+    row.rhs += scratch.w[j] * nodes[j].value;
+  }
+  return RowKind::rbf;
+}
+
+template bool regular_neighbourhood<2>(const CellGraph<2>&, CellId);
+template bool regular_neighbourhood<3>(const CellGraph<3>&, CellId);
+template RowKind fd_row<2>(const CellGraph<2>&, const DofLayout<2>&, const Boundary<2>&, CellId, Row&);
+template RowKind fd_row<3>(const CellGraph<3>&, const DofLayout<3>&, const Boundary<3>&, CellId, Row&);
+template RowKind rbf_row<2>(const CellGraph<2>&, const DofLayout<2>&, const Boundary<2>&, CellId,
+                            const PoissonOptions&, rbf::WeightCache<2>*, RowScratch<2>&, Row&, rbf::Status&);
+template RowKind rbf_row<3>(const CellGraph<3>&, const DofLayout<3>&, const Boundary<3>&, CellId,
+                            const PoissonOptions&, rbf::WeightCache<3>*, RowScratch<3>&, Row&, rbf::Status&);
+
+}  // namespace liquid::mac

@@ -1,0 +1,78 @@
+#pragma once
+// Rows of -Lap p at cell centres (the pressure Poisson equation of rbf-liquids-2020, Secs. 4.2-4.3):
+// the standard 5/7-point FD where the cell and its face neighbours have one size (Shortley-Weller
+// at interface cuts, mirror ghosts at Neumann walls), and RBF-FD (PHS + polynomials) on nearby
+// cell centres otherwise. One row at a time, over plain data; the driver (assemble_poisson) loops.
+
+#include <utility>
+#include <vector>
+
+#include "liquid/mac/boundary.hpp"
+#include "liquid/mac/dof_layout.hpp"
+#include "liquid/mac/stencil.hpp"
+#include "liquid/rbf/weight_cache.hpp"
+#include "liquid/rbf/weights.hpp"
+#include "liquid/tree/cell_graph.hpp"
+
+namespace liquid::mac {
+
+enum class Nullspace { pin, zero_mean };
+
+// Polynomial degrees. The paper uses degree 2 everywhere; both defaults here are 3, as measured:
+//   - Laplacian rows: degree m reproduces polynomials of degree m, so the truncation error of a
+//     second derivative is O(h^(m-1)). Degree 2 leaves O(h) on the layer of T-junction rows. p still
+//     converges at second order, but that layer's error shows in dp/dn: with rows made by
+//     subdivision, dp/dn converged at 1.75 (2D Neumann, worst faces the hanging faces at the layer)
+//     and 1.18 (3D Neumann), and 3D Dirichlet missed in p too (1.49). Degree 3 gave 1.9-2.3 on all
+//     four paper studies (case poisson-rbf-degree runs both side by side).
+//   - Face gradients: with degree 2 (an O(h^2) gradient stencil) the L-inf of dp/dn at hanging
+//     faces next to a Dirichlet interface converged at about 1.7 on the 2D level-set case; degree 3
+//     gave 1.9-2.0 and 5-10 times smaller errors, the maximum moving to plain FD faces.
+struct PoissonOptions {
+  rbf::Config rbf{3, 3};                 ///< kernel and polynomial degree of the RBF-FD Laplacian rows
+  int gradient_degree = 3;               ///< polynomial degree of RBF-FD face gradients (see above)
+  StencilRule rule = StencilRule::ring;  ///< how irregular stencils are chosen (ring: best L-inf measured)
+  double growth = 2.0;                   ///< irregular stencils get stencil_size(Dim, degree, growth) nodes
+  bool regular_fd = true;                ///< plain FD where the neighbourhood is regular
+  Nullspace nullspace = Nullspace::pin;  ///< for singular (pure Neumann) problems
+  /// Share RBF-FD weights between congruent stencils within one assembly (rbf::WeightCache):
+  /// T-junctions of one layout repeat across the tree and across levels. Stencils holding an
+  /// interface crossing are always solved directly.
+  bool cache_weights = true;
+};
+
+/// One matrix row: (column, value) pairs and a right-hand-side term.
+struct Row {
+  std::vector<std::pair<int, double>> entries;
+  double rhs = 0.0;
+};
+
+enum class RowKind { fd, rbf, on_interface };
+
+/// Per-thread scratch of the row kernels.
+template <int Dim>
+struct RowScratch {
+  std::vector<StencilNode<Dim>> nodes;
+  std::vector<double> w;
+  long n_retried = 0;
+};
+
+/// True when every side of c has exactly one face and it is full (same level) or a wall.
+template <int Dim>
+bool regular_neighbourhood(const CellGraph<Dim>& graph, CellId c);
+
+/// Adds the FD row of -Lap p at the regular cell c to `row` (whose rhs already holds -f); a centre
+/// on the interface becomes p_c = value. Returns RowKind::fd or RowKind::on_interface.
+template <int Dim>
+RowKind fd_row(const CellGraph<Dim>& graph, const DofLayout<Dim>& layout, const Boundary<Dim>& boundary, CellId c,
+               Row& row);
+
+/// Adds the RBF-FD row of -Lap p at cell c to `row`; a centre within 1e-3 cell sizes of the
+/// interface takes the interface value (RowKind::on_interface). `status` receives the weights'
+/// status. Throws liquid::Error naming the cell when no usable weights exist.
+template <int Dim>
+RowKind rbf_row(const CellGraph<Dim>& graph, const DofLayout<Dim>& layout, const Boundary<Dim>& boundary, CellId c,
+                const PoissonOptions& options, rbf::WeightCache<Dim>* cache, RowScratch<Dim>& scratch, Row& row,
+                rbf::Status& status);
+
+}  // namespace liquid::mac

@@ -1,0 +1,180 @@
+#include "options.hpp"
+
+#include <unistd.h>
+
+#include <charconv>
+#include <map>
+#include <regex>
+
+#include <fmt/format.h>
+
+#include "liquid/core/error.hpp"
+
+namespace liquid::verification {
+
+namespace {
+
+const std::map<std::string, linalg::SolverKind> solver_names{
+    {"bicgstab-jacobi", linalg::SolverKind::bicgstab_jacobi},
+    {"bicgstab-ilut", linalg::SolverKind::bicgstab_ilut},
+    {"cg-ic", linalg::SolverKind::cg_ic},
+    {"cg-jacobi", linalg::SolverKind::cg_jacobi},
+    {"direct", linalg::SolverKind::direct}};
+const std::map<std::string, mac::StencilRule> stencil_names{{"nearest", mac::StencilRule::nearest},
+                                                            {"face-grown", mac::StencilRule::face_grown},
+                                                            {"ring", mac::StencilRule::ring}};
+const std::map<std::string, RowProtocol> row_names{{"refine", RowProtocol::refine},
+                                                   {"rebuild", RowProtocol::rebuild}};
+const std::map<std::string, mac::Nullspace> nullspace_names{{"pin", mac::Nullspace::pin},
+                                                            {"zero-mean", mac::Nullspace::zero_mean}};
+const std::map<std::string, Perturbation> perturb_names{{"first-order", Perturbation::first_order}};
+
+template <class E>
+std::string name_of(const std::map<std::string, E>& names, E value) {
+  for (const auto& [k, v] : names)
+    if (v == value) return k;
+  return "?";
+}
+
+}  // namespace
+
+LevelRange parse_level_range(const std::string& text, const std::string& flag) {
+  static const std::regex pattern(R"(^\s*(\d+)\s*:\s*(\d+)\s*$)");
+  std::smatch m;
+  LIQUID_VERIFY(std::regex_match(text, m, pattern), "{} expects A:B with integers A <= B, got '{}'", flag, text);
+  LevelRange r;
+  for (auto [part, out] : {std::pair{m.str(1), &r.first}, std::pair{m.str(2), &r.last}}) {
+    const auto [end, ec] = std::from_chars(part.data(), part.data() + part.size(), *out);
+    LIQUID_VERIFY(ec == std::errc() && end == part.data() + part.size() && *out <= 64,
+                  "{} {}: the level {} is out of range (0 to 64; a tree has at most 30 levels in 2D, 20 in 3D)",
+                  flag, text, part);
+  }
+  LIQUID_VERIFY(r.first <= r.last, "{} {}: the first level exceeds the last", flag, text);
+  return r;
+}
+
+long default_max_cells() {
+  const long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGE_SIZE);
+  if (pages <= 0 || page <= 0) return 4'000'000;
+  return static_cast<long>(0.5 * double(pages) * double(page) / 4096.0);
+}
+
+bool StudyFlags::given(Option option) const { return app->count(flag_of(option)) > 0; }
+
+void add_study_flags(CLI::App& app, StudyFlags& f) {
+  f.app = &app;
+  f.max_cells = default_max_cells();
+  app.add_option("--levels", f.levels, "refinement levels A:B of a convergence study");
+  app.add_option("--max-jump", f.max_jump, "largest level jump between neighbouring cells (1-30)")
+      ->check(CLI::Range(1, 30));
+  app.add_option("--solver", f.solver, "linear solver")->transform(CLI::CheckedTransformer(solver_names));
+  app.add_option("--stencil", f.stencil, "RBF-FD stencil rule")->transform(CLI::CheckedTransformer(stencil_names));
+  app.add_option("--rbf-exponent", f.rbf_exponent, "PHS exponent s of the RBF-FD Laplacian rows")
+      ->check(CLI::IsMember({1, 3, 5, 7, 9}));
+  app.add_option("--rbf-degree", f.rbf_degree, "polynomial degree of the RBF-FD Laplacian rows")
+      ->check(CLI::Range(0, 4));
+  app.add_option("--gradient-degree", f.gradient_degree, "polynomial degree of RBF-FD face gradients")
+      ->check(CLI::Range(0, 4));
+  app.add_option("--stencil-growth", f.stencil_growth,
+                 "irregular RBF-FD stencils grow to G x (polynomial terms) + 1 nodes")
+      ->check(CLI::Range(1.0, 8.0));
+  app.add_option("--rows", f.rows,
+                 "Poisson studies: refine the first row's tree uniformly (the paper's recursive subdivision) "
+                 "or rebuild each row's tree by its rule")
+      ->transform(CLI::CheckedTransformer(row_names));
+  app.add_option("--nullspace", f.nullspace,
+                 "pure Neumann Poisson studies: pin one unknown near the centre to the exact value, or zero mean")
+      ->transform(CLI::CheckedTransformer(nullspace_names));
+  app.add_option("--tolerance", f.tolerance, "relative residual the linear solver must reach")
+      ->check(CLI::Range(1e-16, 0.5));
+  app.add_option("--perturb", f.perturb, "run a deliberately degraded scheme (first-order)")
+      ->transform(CLI::CheckedTransformer(perturb_names));
+  app.add_option("--trees", f.trees_dir, "write the trees the case checks to DIR as HDF5 + XDMF (ParaView)")
+      ->check(CLI::ExistingDirectory);
+  app.add_option("--max-cells", f.max_cells, "refuse rows estimated above N cells (default: half the memory)")
+      ->check(CLI::Range(1L, 1'000'000'000'000L));
+  app.add_flag("--full", f.full, "use the full suite's extent");
+}
+
+CaseOptions case_options(const StudyFlags& f, const CaseInfo& info) {
+  std::vector<std::string> refused;
+  for (Option o : {Option::levels, Option::max_jump, Option::solver, Option::stencil, Option::rbf_exponent,
+                   Option::rbf_degree, Option::gradient_degree, Option::stencil_growth, Option::rows,
+                   Option::nullspace, Option::tolerance, Option::perturb, Option::trees})
+    if (f.given(o) && !info.accepts_option(o)) refused.push_back(flag_of(o));
+  if (!refused.empty()) {
+    std::vector<std::string> accepted;
+    for (Option o : info.accepts) accepted.push_back(flag_of(o));
+    throw Error(fmt::format("case '{}' does not take {}: it {}", info.name, fmt::join(refused, ", "),
+                            accepted.empty() ? "fixes its own problem, trees and scheme (it takes only --full)"
+                                             : fmt::format("takes {} (and --full)", fmt::join(accepted, ", "))));
+  }
+  CaseOptions o;
+  if (f.given(Option::levels)) o.levels = parse_level_range(f.levels, "--levels");
+  if (f.given(Option::max_jump)) o.max_jump = f.max_jump;
+  if (f.given(Option::solver)) o.solver = f.solver;
+  if (f.given(Option::stencil)) o.stencil = f.stencil;
+  if (f.given(Option::rbf_exponent)) o.rbf_exponent = f.rbf_exponent;
+  if (f.given(Option::rbf_degree)) o.rbf_degree = f.rbf_degree;
+  if (f.given(Option::gradient_degree)) o.gradient_degree = f.gradient_degree;
+  if (f.given(Option::stencil_growth)) o.stencil_growth = f.stencil_growth;
+  if (f.given(Option::rows)) o.rows = f.rows;
+  if (f.given(Option::nullspace)) o.nullspace = f.nullspace;
+  if (f.given(Option::tolerance)) o.tolerance = f.tolerance;
+  if (f.given(Option::perturb)) o.perturb = f.perturb;
+  if (f.given(Option::trees)) o.trees_dir = f.trees_dir;
+  o.max_cells = f.max_cells;
+  o.full = f.full;
+  return o;
+}
+
+std::string echo(const std::string& case_name, const StudyFlags& f) {
+  const auto show = [&](Option o, const std::string& value) {
+    return fmt::format(" {} {}", flag_of(o), f.given(o) ? value : "default");
+  };
+  std::string s = "liquid-verify run " + case_name;
+  s += show(Option::levels, f.levels);
+  s += show(Option::max_jump, std::to_string(f.max_jump));
+  s += show(Option::solver, name_of(solver_names, f.solver));
+  s += show(Option::stencil, name_of(stencil_names, f.stencil));
+  s += show(Option::rbf_exponent, std::to_string(f.rbf_exponent));
+  s += show(Option::rbf_degree, std::to_string(f.rbf_degree));
+  s += show(Option::gradient_degree, std::to_string(f.gradient_degree));
+  s += show(Option::stencil_growth, fmt::format("{:g}", f.stencil_growth));
+  s += show(Option::rows, name_of(row_names, f.rows));
+  s += show(Option::nullspace, name_of(nullspace_names, f.nullspace));
+  s += show(Option::tolerance, fmt::format("{:g}", f.tolerance));
+  s += show(Option::perturb, name_of(perturb_names, f.perturb));
+  s += show(Option::trees, f.trees_dir);
+  s += fmt::format(" --max-cells {} --tier {}", f.max_cells, f.full ? "full" : "quick");
+  return s;
+}
+
+void add_user_poisson_flags(CLI::App& app, UserPoissonArgs& a) {
+  a.max_cells = default_max_cells();
+  app.add_option("--dim", a.dim, "2 or 3")->required()->check(CLI::IsMember({2, 3}));
+  app.add_option("--exact", a.exact, "exact p as an expression in x, y (, z), e.g. 'sin(x)*cos(2*y)'")->required();
+  app.add_option("--levelset", a.levelset, "unknowns where this expression is negative; p = exact on its zero set");
+  app.add_option("--domain", a.domain, "x0,x1,y0,y1[,z0,z1]")->required();
+  app.add_option("--bc", a.bc, "walls: neumann (dp/dn of the exact p) or dirichlet (the exact p)")
+      ->check(CLI::IsMember({"neumann", "dirichlet"}));
+  app.add_option("--tree", a.tree, "uniform, band, or random:SEED");
+  app.add_option("--max-jump", a.max_jump, "largest level jump between neighbouring cells (1-30)")
+      ->check(CLI::Range(1, 30));
+  app.add_option("--levels", a.levels, "base levels A:B of the rows (A < B)");
+  app.add_option("--rows", a.rows, "refine the first row's tree (default) or rebuild each row's")
+      ->transform(CLI::CheckedTransformer(row_names));
+  app.add_option("--solver", a.solver, "linear solver")->transform(CLI::CheckedTransformer(solver_names));
+  app.add_option("--nullspace", a.nullspace, "singular Neumann problems: pin (default) or zero-mean")
+      ->transform(CLI::CheckedTransformer(nullspace_names));
+  app.add_option("--tolerance", a.tolerance, "relative residual the linear solver must reach (default 1e-10)")
+      ->check(CLI::Range(1e-16, 0.5));
+  app.add_option("--expect-order", a.expect_order,
+                 "P[,G]: exit 1 when the fitted order of p (and of dp/dn) falls below");
+  app.add_option("--expect-error", a.expect_error, "exit 1 when the finest row's L-inf error of p exceeds E")
+      ->check(CLI::PositiveNumber);
+  app.add_option("--max-cells", a.max_cells, "refuse rows estimated above N cells (default: half the memory)")
+      ->check(CLI::Range(1L, 1'000'000'000'000L));
+}
+
+}  // namespace liquid::verification

@@ -1,0 +1,53 @@
+#pragma once
+// The command line of liquid-verify, parsed once into typed values (CLI11 validators), and echoed
+// back in full at start-up. Cases receive CaseOptions; a user's study receives UserPoissonArgs.
+
+#include <CLI/CLI.hpp>
+
+#include <string>
+#include <vector>
+
+#include "common/case.hpp"
+#include "user_poisson.hpp"
+
+namespace liquid::verification {
+
+/// The study options of `run` as CLI11 fills them; `given(option)` says whether the user set it.
+struct StudyFlags {
+  CLI::App* app = nullptr;
+  std::string levels;
+  int max_jump = 2;
+  linalg::SolverKind solver = linalg::SolverKind::bicgstab_ilut;
+  mac::StencilRule stencil = mac::StencilRule::ring;
+  int rbf_exponent = 3, rbf_degree = 3, gradient_degree = 3;
+  double stencil_growth = 2.0;
+  RowProtocol rows = RowProtocol::refine;
+  mac::Nullspace nullspace = mac::Nullspace::pin;
+  double tolerance = 1e-10;
+  Perturbation perturb = Perturbation::first_order;
+  std::string trees_dir;
+  long max_cells = 0;
+  bool full = false;
+
+  bool given(Option option) const;
+};
+
+/// Registers --levels ... --trees, --max-cells and --full on `app`.
+void add_study_flags(CLI::App& app, StudyFlags& flags);
+/// The options given, typed; throws liquid::Error naming the flag on a value no validator could check
+/// (--levels A:B), and when `info` does not accept a flag given.
+CaseOptions case_options(const StudyFlags& flags, const CaseInfo& info);
+/// One line with every option of `run` and its value ("default" where the case decides).
+std::string echo(const std::string& case_name, const StudyFlags& flags);
+
+/// Registers the options of `liquid-verify poisson` on `app`.
+void add_user_poisson_flags(CLI::App& app, UserPoissonArgs& args);
+
+/// The default budget of cells for one row: half the machine's memory at 4 KiB a cell (tree,
+/// matrix with RBF-FD rows, ILUT factors and solver vectors measured at about 2-3 KiB).
+long default_max_cells();
+
+/// "A:B" with integers 0 <= A <= B <= 64; throws liquid::Error naming `flag`.
+LevelRange parse_level_range(const std::string& text, const std::string& flag);
+
+}  // namespace liquid::verification

@@ -1,0 +1,17 @@
+#!/bin/sh
+# Writes a corrupted copy of an accepted reference and gates the case against it.
+# Usage: bad_reference.sh MODE VERIFY REFERENCE_DIR CASE, MODE one of nan-value, inf-tolerance,
+# duplicate, kind. The gate must refuse the file (exit 2) naming the problem and the line.
+mode=$1 verify=$2 ref=$3 case=$4
+dir=$(mktemp -d) || exit 3
+trap 'rm -rf "$dir"' EXIT
+src="$ref/$case.toml"
+dst="$dir/$case.toml"
+case $mode in
+  nan-value) sed '0,/^value = .*/s//value = nan/' "$src" > "$dst" ;;
+  inf-tolerance) sed 's/^error_rel = .*/error_rel = inf/' "$src" > "$dst" ;;
+  duplicate) { cat "$src"; awk '/^\[\[figure\]\]/{n++} n==1' "$src"; } > "$dst" ;;
+  kind) awk '/^kind = "order"/ && !done {print "kind = \"error\""; done=1; next} {print}' "$src" > "$dst" ;;
+  *) echo "bad_reference.sh: unknown mode $mode"; exit 3 ;;
+esac
+"$verify" gate --case "$case" --reference "$dir"
