@@ -65,6 +65,8 @@ struct Scenario {
 CaseResult run(const CaseOptions& options) {
   // The scenarios fix their own jumps, solver and scheme (only --levels A:B sets the base level A).
   const int L = options.levels ? options.levels->first : (options.full ? 6 : 5);
+  LIQUID_VERIFY(L >= 2 && L <= 12, "poisson-hard: --levels A:B sets the base level A, which must be in 2..12 (got {})",
+                L);
   const Box<2> square{Vec<2>::Zero(), Vec<2>::Constant(pi)};
   std::vector<Scenario> scenarios;
   for (std::uint64_t seed : {11u, 12u}) {

@@ -18,6 +18,8 @@
 // adapt steps), --trees DIR (write each built tree as DIR/cellgraph-<D>d-jump<K>.h5 + .xmf, with
 // the cell field "hanging_faces": how many faces cover only part of one of the cell's sides;
 // ParaView opens the .xmf).
+#include <cmath>
+
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -128,6 +130,11 @@ CaseResult run(const CaseOptions& options) {
   const int last = options.levels ? options.levels->last : 7;
   LIQUID_VERIFY(first >= 0 && last >= first + 1 && last <= 20,
                 "cellgraph-invariants: --levels {}:{} needs 0 <= A < B <= 20", first, last);
+  // Every tree holds at least its first level in 3D: refuse before building past the budget.
+  LIQUID_VERIFY(options.max_cells <= 0 || std::ldexp(1.0, 3 * first) <= double(options.max_cells),
+                "--levels {}:{}: a 3D tree from level {} has at least {:.3g} cells, over the budget of {} cells "
+                "(--max-cells N raises it)",
+                first, last, first, std::ldexp(1.0, 3 * first), options.max_cells);
   const int n_steps = options.full ? 100 : 25;
   std::vector<std::string> written;
 
