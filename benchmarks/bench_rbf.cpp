@@ -6,9 +6,9 @@
 
 #include <algorithm>
 
-#include "support/stencils.hpp"
 #include "liquid/rbf/weight_cache.hpp"
 #include "liquid/rbf/weights.hpp"
+#include "support/stencils.hpp"
 
 namespace {
 

@@ -1,7 +1,8 @@
 // liquid-verify: runs the verification cases and suites.
 //
 //   liquid-verify list
-//   liquid-verify run CASE [--json FILE] [--md FILE] [--levels A:B] [--max-jump K] [--solver NAME] ... [--full]
+//   liquid-verify run CASE [--json FILE] [--md FILE] [--levels A:B] [--max-jump K] [--solver NAME] ...
+//   [--full]
 //                         (a case refuses the study options it does not read)
 //   liquid-verify suite quick|full [--out DIR]
 //   liquid-verify poisson --dim 2|3 --exact EXPR [--levelset EXPR] --domain x0,x1,y0,y1[,z0,z1]
@@ -63,7 +64,8 @@ int main(int argc, char** argv) {
 
   auto* list = app.add_subcommand("list", "list the verification cases");
   bool quick_names = false;
-  list->add_flag("--quick-names", quick_names, "print only the names of the quick cases, one a line (for ctest)");
+  list->add_flag("--quick-names", quick_names,
+                 "print only the names of the quick cases, one a line (for ctest)");
 
   std::string case_name, json_path, md_path;
   lv::StudyFlags flags;
@@ -84,12 +86,14 @@ int main(int argc, char** argv) {
   auto* gate =
       app.add_subcommand("gate", "run a suite and compare its figures with the accepted ones in reference/");
   gate->add_option("--suite", gate_suite, "quick or full")->check(CLI::IsMember({"quick", "full"}));
-  gate->add_option("--reference", reference_dir, "folder of the accepted <case>.toml files (default: the "
-                                                 "source tree's reference/)")
+  gate->add_option("--reference", reference_dir,
+                   "folder of the accepted <case>.toml files (default: the "
+                   "source tree's reference/)")
       ->check(CLI::ExistingDirectory);
   gate->add_option("--case", gate_cases, "gate only these cases (repeatable)");
   gate->add_flag("--bless", bless, "write the current figures as the accepted ones");
-  gate->add_option("--perturb", perturb, "run a deliberately degraded scheme (first-order) to see the gate fail")
+  gate->add_option("--perturb", perturb,
+                   "run a deliberately degraded scheme (first-order) to see the gate fail")
       ->check(CLI::IsMember({"first-order"}));
 
   lv::UserPoissonArgs user;
@@ -163,7 +167,8 @@ int main(int argc, char** argv) {
       const std::string command = lv::describe(user);
       fmt::print("{}\n", command);
       const lv::CaseInfo info{"poisson-user", command, false,
-                              [&](const lv::CaseOptions&) { return lv::run_user_poisson(user); }, lv::no_options};
+                              [&](const lv::CaseOptions&) { return lv::run_user_poisson(user); },
+                              lv::no_options};
       return run_case(info, lv::CaseOptions{}, user_json, user_md).passed ? 0 : 1;
     }
     if (*gate) {
@@ -214,8 +219,9 @@ int main(int argc, char** argv) {
     fmt::print(stderr, "liquid-verify: error: {}\n", e.what());
     return 2;
   } catch (const std::bad_alloc&) {
-    fmt::print(stderr, "liquid-verify: internal error: out of memory (a smaller --levels or --max-cells "
-                       "refuses such a study before it starts)\n");
+    fmt::print(stderr,
+               "liquid-verify: internal error: out of memory (a smaller --levels or --max-cells "
+               "refuses such a study before it starts)\n");
     return 3;
   } catch (const std::exception& e) {
     fmt::print(stderr, "liquid-verify: internal error: {}\n", e.what());

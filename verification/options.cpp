@@ -41,13 +41,15 @@ std::string name_of(const std::map<std::string, E>& names, E value) {
 LevelRange parse_level_range(const std::string& text, const std::string& flag) {
   static const std::regex pattern(R"(^\s*(\d+)\s*:\s*(\d+)\s*$)");
   std::smatch m;
-  LIQUID_VERIFY(std::regex_match(text, m, pattern), "{} expects A:B with integers A <= B, got '{}'", flag, text);
+  LIQUID_VERIFY(std::regex_match(text, m, pattern), "{} expects A:B with integers A <= B, got '{}'", flag,
+                text);
   LevelRange r;
   for (auto [part, out] : {std::pair{m.str(1), &r.first}, std::pair{m.str(2), &r.last}}) {
     const auto [end, ec] = std::from_chars(part.data(), part.data() + part.size(), *out);
-    LIQUID_VERIFY(ec == std::errc() && end == part.data() + part.size() && *out <= 64,
-                  "{} {}: the level {} is out of range (0 to 64; a tree has at most 30 levels in 2D, 20 in 3D)",
-                  flag, text, part);
+    LIQUID_VERIFY(
+        ec == std::errc() && end == part.data() + part.size() && *out <= 64,
+        "{} {}: the level {} is out of range (0 to 64; a tree has at most 30 levels in 2D, 20 in 3D)", flag,
+        text, part);
   }
   LIQUID_VERIFY(r.first <= r.last, "{} {}: the first level exceeds the last", flag, text);
   return r;
@@ -59,7 +61,9 @@ long default_max_cells() {
   return static_cast<long>(0.5 * double(pages) * double(page) / 4096.0);
 }
 
-bool StudyFlags::given(Option option) const { return app->count(flag_of(option)) > 0; }
+bool StudyFlags::given(Option option) const {
+  return app->count(flag_of(option)) > 0;
+}
 
 void add_study_flags(CLI::App& app, StudyFlags& f) {
   f.app = &app;
@@ -68,7 +72,8 @@ void add_study_flags(CLI::App& app, StudyFlags& f) {
   app.add_option("--max-jump", f.max_jump, "largest level jump between neighbouring cells (1-30)")
       ->check(CLI::Range(1, 30));
   app.add_option("--solver", f.solver, "linear solver")->transform(CLI::CheckedTransformer(solver_names));
-  app.add_option("--stencil", f.stencil, "RBF-FD stencil rule")->transform(CLI::CheckedTransformer(stencil_names));
+  app.add_option("--stencil", f.stencil, "RBF-FD stencil rule")
+      ->transform(CLI::CheckedTransformer(stencil_names));
   app.add_option("--rbf-exponent", f.rbf_exponent, "PHS exponent s of the RBF-FD Laplacian rows")
       ->check(CLI::IsMember({1, 3, 5, 7, 9}));
   app.add_option("--rbf-degree", f.rbf_degree, "polynomial degree of the RBF-FD Laplacian rows")
@@ -82,8 +87,9 @@ void add_study_flags(CLI::App& app, StudyFlags& f) {
                  "Poisson studies: refine the first row's tree uniformly (the paper's recursive subdivision) "
                  "or rebuild each row's tree by its rule")
       ->transform(CLI::CheckedTransformer(row_names));
-  app.add_option("--nullspace", f.nullspace,
-                 "pure Neumann Poisson studies: pin one unknown near the centre to the exact value, or zero mean")
+  app.add_option(
+         "--nullspace", f.nullspace,
+         "pure Neumann Poisson studies: pin one unknown near the centre to the exact value, or zero mean")
       ->transform(CLI::CheckedTransformer(nullspace_names));
   app.add_option("--tolerance", f.tolerance, "relative residual the linear solver must reach")
       ->check(CLI::Range(1e-16, 0.5));
@@ -106,8 +112,9 @@ CaseOptions case_options(const StudyFlags& f, const CaseInfo& info) {
     std::vector<std::string> accepted;
     for (Option o : info.accepts) accepted.push_back(flag_of(o));
     throw Error(fmt::format("case '{}' does not take {}: it {}", info.name, fmt::join(refused, ", "),
-                            accepted.empty() ? "fixes its own problem, trees and scheme (it takes only --full)"
-                                             : fmt::format("takes {} (and --full)", fmt::join(accepted, ", "))));
+                            accepted.empty()
+                                ? "fixes its own problem, trees and scheme (it takes only --full)"
+                                : fmt::format("takes {} (and --full)", fmt::join(accepted, ", "))));
   }
   CaseOptions o;
   if (f.given(Option::levels)) o.levels = parse_level_range(f.levels, "--levels");
@@ -153,8 +160,10 @@ std::string echo(const std::string& case_name, const StudyFlags& f) {
 void add_user_poisson_flags(CLI::App& app, UserPoissonArgs& a) {
   a.max_cells = default_max_cells();
   app.add_option("--dim", a.dim, "2 or 3")->required()->check(CLI::IsMember({2, 3}));
-  app.add_option("--exact", a.exact, "exact p as an expression in x, y (, z), e.g. 'sin(x)*cos(2*y)'")->required();
-  app.add_option("--levelset", a.levelset, "unknowns where this expression is negative; p = exact on its zero set");
+  app.add_option("--exact", a.exact, "exact p as an expression in x, y (, z), e.g. 'sin(x)*cos(2*y)'")
+      ->required();
+  app.add_option("--levelset", a.levelset,
+                 "unknowns where this expression is negative; p = exact on its zero set");
   app.add_option("--domain", a.domain, "x0,x1,y0,y1[,z0,z1]")->required();
   app.add_option("--bc", a.bc, "walls: neumann (dp/dn of the exact p) or dirichlet (the exact p)")
       ->check(CLI::IsMember({"neumann", "dirichlet"}));

@@ -10,11 +10,11 @@
 #include <fmt/format.h>
 
 #include "common/expression.hpp"
-#include "options.hpp"
-#include "studies/poisson_study.hpp"
 #include "liquid/core/error.hpp"
 #include "liquid/levelset/levelset.hpp"
 #include "liquid/tree/builders.hpp"
+#include "options.hpp"
+#include "studies/poisson_study.hpp"
 
 namespace liquid::verification {
 
@@ -89,7 +89,8 @@ CaseResult run(const UserPoissonArgs& args) {
     LIQUID_VERIFY(floors.size() == 1 || floors.size() == 2, "--expect-order expects P or P,G, got '{}'",
                   args.expect_order);
     for (double v : floors)
-      LIQUID_VERIFY(std::isfinite(v) && v > 0.0 && v < 10.0, "--expect-order: {} is not an order in (0, 10)", v);
+      LIQUID_VERIFY(std::isfinite(v) && v > 0.0 && v < 10.0, "--expect-order: {} is not an order in (0, 10)",
+                    v);
     s.order_floor = floors[0];
     if (floors.size() == 2) s.order_grad_floor = floors[1];
   }

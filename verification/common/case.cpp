@@ -9,29 +9,46 @@ namespace liquid::verification {
 
 const char* flag_of(Option option) {
   switch (option) {
-    case Option::levels: return "--levels";
-    case Option::max_jump: return "--max-jump";
-    case Option::solver: return "--solver";
-    case Option::stencil: return "--stencil";
-    case Option::rbf_exponent: return "--rbf-exponent";
-    case Option::rbf_degree: return "--rbf-degree";
-    case Option::gradient_degree: return "--gradient-degree";
-    case Option::stencil_growth: return "--stencil-growth";
-    case Option::rows: return "--rows";
-    case Option::nullspace: return "--nullspace";
-    case Option::tolerance: return "--tolerance";
-    case Option::perturb: return "--perturb";
-    case Option::trees: return "--trees";
+    case Option::levels:
+      return "--levels";
+    case Option::max_jump:
+      return "--max-jump";
+    case Option::solver:
+      return "--solver";
+    case Option::stencil:
+      return "--stencil";
+    case Option::rbf_exponent:
+      return "--rbf-exponent";
+    case Option::rbf_degree:
+      return "--rbf-degree";
+    case Option::gradient_degree:
+      return "--gradient-degree";
+    case Option::stencil_growth:
+      return "--stencil-growth";
+    case Option::rows:
+      return "--rows";
+    case Option::nullspace:
+      return "--nullspace";
+    case Option::tolerance:
+      return "--tolerance";
+    case Option::perturb:
+      return "--perturb";
+    case Option::trees:
+      return "--trees";
   }
   return "?";
 }
 
-const char* to_string(RowProtocol rows) { return rows == RowProtocol::refine ? "refine" : "rebuild"; }
+const char* to_string(RowProtocol rows) {
+  return rows == RowProtocol::refine ? "refine" : "rebuild";
+}
 
 bool CaseInfo::accepts_option(Option o) const {
   return std::find(accepts.begin(), accepts.end(), o) != accepts.end();
 }
-bool CaseInfo::perturbable() const { return accepts_option(Option::perturb); }
+bool CaseInfo::perturbable() const {
+  return accepts_option(Option::perturb);
+}
 
 std::vector<CaseInfo>& case_registry() {
   static std::vector<CaseInfo> cases;

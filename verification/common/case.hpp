@@ -19,8 +19,19 @@ namespace liquid::verification {
 /// A study option of `liquid-verify run`; a case declares those it accepts (CaseInfo::accepts), and
 /// `run` refuses any other with exit 2.
 enum class Option {
-  levels, max_jump, solver, stencil, rbf_exponent, rbf_degree, gradient_degree, stencil_growth, rows,
-  nullspace, tolerance, perturb, trees
+  levels,
+  max_jump,
+  solver,
+  stencil,
+  rbf_exponent,
+  rbf_degree,
+  gradient_degree,
+  stencil_growth,
+  rows,
+  nullspace,
+  tolerance,
+  perturb,
+  trees
 };
 using OptionSet = std::vector<Option>;
 /// The command-line flag of an option ("--max-jump").
@@ -44,28 +55,28 @@ struct LevelRange {
 /// Typed options of `liquid-verify run`, parsed and range-checked once in main; a case reads those it
 /// declared.
 struct CaseOptions {
-  std::optional<LevelRange> levels;                ///< --levels A:B
-  std::optional<int> max_jump;                     ///< --max-jump K (>= 1)
-  std::optional<linalg::SolverKind> solver;        ///< --solver NAME
-  std::optional<mac::StencilRule> stencil;         ///< --stencil RULE
-  std::optional<int> rbf_exponent;                 ///< --rbf-exponent S: PHS r^S of the Laplacian rows
-  std::optional<int> rbf_degree;                   ///< --rbf-degree M: their polynomial degree
-  std::optional<int> gradient_degree;              ///< --gradient-degree M: degree of face gradients
-  std::optional<double> stencil_growth;            ///< --stencil-growth G
-  std::optional<RowProtocol> rows;                 ///< --rows refine|rebuild
-  std::optional<mac::Nullspace> nullspace;         ///< --nullspace pin|zero-mean
-  std::optional<double> tolerance;                 ///< --tolerance T: the solver's relative residual
-  std::optional<Perturbation> perturb;             ///< --perturb first-order
-  std::optional<std::string> trees_dir;            ///< --trees DIR: write the trees checked
-  long max_cells = 0;                              ///< refuse rows above this many cells (0: no limit)
-  bool full = false;                               ///< the full suite's extent rather than the quick one
+  std::optional<LevelRange> levels;          ///< --levels A:B
+  std::optional<int> max_jump;               ///< --max-jump K (>= 1)
+  std::optional<linalg::SolverKind> solver;  ///< --solver NAME
+  std::optional<mac::StencilRule> stencil;   ///< --stencil RULE
+  std::optional<int> rbf_exponent;           ///< --rbf-exponent S: PHS r^S of the Laplacian rows
+  std::optional<int> rbf_degree;             ///< --rbf-degree M: their polynomial degree
+  std::optional<int> gradient_degree;        ///< --gradient-degree M: degree of face gradients
+  std::optional<double> stencil_growth;      ///< --stencil-growth G
+  std::optional<RowProtocol> rows;           ///< --rows refine|rebuild
+  std::optional<mac::Nullspace> nullspace;   ///< --nullspace pin|zero-mean
+  std::optional<double> tolerance;           ///< --tolerance T: the solver's relative residual
+  std::optional<Perturbation> perturb;       ///< --perturb first-order
+  std::optional<std::string> trees_dir;      ///< --trees DIR: write the trees checked
+  long max_cells = 0;                        ///< refuse rows above this many cells (0: no limit)
+  bool full = false;                         ///< the full suite's extent rather than the quick one
 };
 
 /// Every option of a Poisson convergence study (run_poisson_study reads them all).
-inline const OptionSet poisson_study_options{Option::levels,          Option::max_jump,  Option::solver,
-                                             Option::stencil,         Option::rbf_exponent, Option::rbf_degree,
-                                             Option::gradient_degree, Option::stencil_growth, Option::rows,
-                                             Option::nullspace,       Option::tolerance, Option::perturb};
+inline const OptionSet poisson_study_options{
+    Option::levels,       Option::max_jump,   Option::solver,          Option::stencil,
+    Option::rbf_exponent, Option::rbf_degree, Option::gradient_degree, Option::stencil_growth,
+    Option::rows,         Option::nullspace,  Option::tolerance,       Option::perturb};
 inline const OptionSet no_options{};
 
 /// A figure the accuracy gate compares with its accepted value in reference/<case>.toml.

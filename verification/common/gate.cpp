@@ -49,8 +49,9 @@ GateTolerance read_tolerance(const toml::table& doc, const std::string& path) {
     auto get = [&](const char* key, double& out) {
       if (const auto* node = tol->get(key)) {
         const auto v = node->value<double>();
-        LIQUID_VERIFY(v && std::isfinite(*v) && *v >= 0.0, "{}: tolerance.{} must be a finite non-negative number",
-                      where(path, node->source()), key);
+        LIQUID_VERIFY(v && std::isfinite(*v) && *v >= 0.0,
+                      "{}: tolerance.{} must be a finite non-negative number", where(path, node->source()),
+                      key);
         out = *v;
       }
     };
@@ -87,9 +88,11 @@ std::vector<AcceptedFigure> read_reference(const std::string& path, GateToleranc
     const auto value = (*t)["value"].value<double>();
     const std::string at = where(path, t->source());
     LIQUID_VERIFY(name && kind && value, "{}: a figure needs name, kind and value", at);
-    LIQUID_VERIFY(std::isfinite(*value), "{}: figure '{}' has the value {}, not a finite number", at, *name, *value);
+    LIQUID_VERIFY(std::isfinite(*value), "{}: figure '{}' has the value {}, not a finite number", at, *name,
+                  *value);
     for (const auto& seen : out)
-      LIQUID_VERIFY(seen.name != *name, "{}: figure '{}' is accepted twice (first at {})", at, *name, seen.where);
+      LIQUID_VERIFY(seen.name != *name, "{}: figure '{}' is accepted twice (first at {})", at, *name,
+                    seen.where);
     out.push_back({*name, *kind, parse_kind(*kind, at), *value, at});
   }
   return out;
@@ -136,8 +139,9 @@ GateOutcome compare_with_reference(const std::string& case_name, const std::vect
       continue;
     }
     // A relabelled kind would switch its check off (an order read as an error passes when it rises).
-    LIQUID_VERIFY(k == now->kind, "{}: figure '{}' is accepted as kind '{}', but the case produces it as '{}'",
-                  a.where, *name, *kind, to_string(now->kind));
+    LIQUID_VERIFY(k == now->kind,
+                  "{}: figure '{}' is accepted as kind '{}', but the case produces it as '{}'", a.where,
+                  *name, *kind, to_string(now->kind));
     line.now = now->value;
     switch (k) {
       case GateFigure::Kind::error:

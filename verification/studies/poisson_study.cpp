@@ -51,7 +51,9 @@ PoissonRun solve_poisson(const CellGraph<Dim>& graph, const PoissonStudy<Dim>& s
   if (!study.dirichlet_walls) {
     // Neumann walls carry the exact solution's flux, so any smooth p converges (zero for the paper's).
     const auto gradient = study.gradient;
-    problem.boundary.wall_flux = [gradient](const Vec<Dim>& x, const Vec<Dim>& n) { return gradient(x).dot(n); };
+    problem.boundary.wall_flux = [gradient](const Vec<Dim>& x, const Vec<Dim>& n) {
+      return gradient(x).dot(n);
+    };
   }
   const mac::PoissonSystem<Dim> system = mac::assemble_poisson<Dim>(graph, problem, study.discretisation);
 
@@ -204,7 +206,8 @@ CaseResult run_poisson_study(PoissonStudy<Dim> study, const CaseOptions& options
     result.expect(std::isfinite(run.err_p) && std::isfinite(run.err_grad),
                   fmt::format("level {}: NaN error", level));
     for (const auto& [l, n, e] : run.err_by_level)
-      levels.add_row({long(level), long(l), n, e, run.err_p > 0.0 ? Table::Cell(e / run.err_p) : Table::Cell{}});
+      levels.add_row(
+          {long(level), long(l), n, e, run.err_p > 0.0 ? Table::Cell(e / run.err_p) : Table::Cell{}});
     if (k > 0) {
       result.expect(run.h < hs[k - 1], fmt::format("level {}: its finest h {:.4g} is not below the previous "
                                                    "row's ({:.4g}): the rows are not a refinement sequence",
@@ -236,11 +239,13 @@ CaseResult run_poisson_study(PoissonStudy<Dim> study, const CaseOptions& options
   // Per-step orders that spread by more than 0.5 mean a pre-asymptotic study: the fit is not an order.
   if (hs.size() >= 3 && *std::min_element(ep.begin(), ep.end()) >= exact_error_level) {
     std::vector<double> steps;
-    for (std::size_t k = 1; k < hs.size(); ++k) steps.push_back(pair_order(hs[k - 1], ep[k - 1], hs[k], ep[k]));
+    for (std::size_t k = 1; k < hs.size(); ++k)
+      steps.push_back(pair_order(hs[k - 1], ep[k - 1], hs[k], ep[k]));
     const auto [lo, hi] = std::minmax_element(steps.begin(), steps.end());
     if (*hi - *lo > 0.5)
       result.warnings.push_back(fmt::format(
-          "the per-step orders of p spread from {:.2f} (rows {} to {}) to {:.2f} (rows {} to {}): the study is "
+          "the per-step orders of p spread from {:.2f} (rows {} to {}) to {:.2f} (rows {} to {}): the study "
+          "is "
           "pre-asymptotic, and its fitted order is not yet the scheme's",
           *lo, study.level_min + (lo - steps.begin()), study.level_min + (lo - steps.begin()) + 1, *hi,
           study.level_min + (hi - steps.begin()), study.level_min + (hi - steps.begin()) + 1));
@@ -318,11 +323,13 @@ std::vector<PoissonRun> solve_rows(const PoissonStudy<Dim>& study, CaseResult& r
   const std::string prefix = label.empty() ? "" : label + " ";
   if (study.max_cells > 0) {
     // Each row splits (or rebuilds at one level finer) about every cell of the one before.
-    const double estimate = double(first.n_cells()) * std::ldexp(1.0, Dim * (study.level_max - study.level_min));
+    const double estimate =
+        double(first.n_cells()) * std::ldexp(1.0, Dim * (study.level_max - study.level_min));
     LIQUID_VERIFY(estimate <= double(study.max_cells),
                   "--levels {}:{}: the first row has {} cells, so the row at base level {} would have about "
                   "{:.3g}, over the budget of {} cells (--max-cells N raises it)",
-                  study.level_min, study.level_max, first.n_cells(), study.level_max, estimate, study.max_cells);
+                  study.level_min, study.level_max, first.n_cells(), study.level_max, estimate,
+                  study.max_cells);
   }
   std::vector<PoissonRun> runs;
   for (int level = study.level_min; level <= study.level_max; ++level) {

@@ -82,7 +82,9 @@ Manufactured<Dim> quartic_bowl() {
 /// p = exp(x) sin(y) + 1: harmonic (f = 0).
 inline Manufactured<2> exp_sin() {
   return {[](const Vec<2>& x) { return std::exp(x[0]) * std::sin(x[1]) + 1.0; },
-          [](const Vec<2>& x) { return Vec<2>(std::exp(x[0]) * std::sin(x[1]), std::exp(x[0]) * std::cos(x[1])); },
+          [](const Vec<2>& x) {
+            return Vec<2>(std::exp(x[0]) * std::sin(x[1]), std::exp(x[0]) * std::cos(x[1]));
+          },
           [](const Vec<2>&) { return 0.0; }};
 }
 

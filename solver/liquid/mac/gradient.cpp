@@ -13,8 +13,8 @@ template <int Dim>
 std::vector<double> face_normal_derivative(const CellGraph<Dim>& graph, const DofLayout<Dim>& layout,
                                            const Boundary<Dim>& boundary, const PoissonOptions& options,
                                            const linalg::Vector& p) {
-  LIQUID_VERIFY(p.size() >= layout.n_unknowns(), "face_normal_derivative: {} values for {} unknowns", p.size(),
-                layout.n_unknowns());
+  LIQUID_VERIFY(p.size() >= layout.n_unknowns(), "face_normal_derivative: {} values for {} unknowns",
+                p.size(), layout.n_unknowns());
   std::vector<double> out(graph.face_capacity(), std::numeric_limits<double>::quiet_NaN());
   const std::vector<FaceId> faces = graph.face_ids();
   rbf::Config config = options.rbf;

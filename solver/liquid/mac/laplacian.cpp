@@ -24,8 +24,8 @@ bool regular_neighbourhood(const CellGraph<Dim>& graph, CellId c) {
 }
 
 template <int Dim>
-RowKind fd_row(const CellGraph<Dim>& graph, const DofLayout<Dim>& layout, const Boundary<Dim>& boundary, CellId c,
-               Row& row) {
+RowKind fd_row(const CellGraph<Dim>& graph, const DofLayout<Dim>& layout, const Boundary<Dim>& boundary,
+               CellId c, Row& row) {
   const int i = layout.dof_of_cell[c];
   const Vec<Dim> x = graph.centre(c);
   const Vec<Dim> h = graph.cell_size(c);
@@ -89,9 +89,9 @@ RowKind fd_row(const CellGraph<Dim>& graph, const DofLayout<Dim>& layout, const 
 }
 
 template <int Dim>
-RowKind rbf_row(const CellGraph<Dim>& graph, const DofLayout<Dim>& layout, const Boundary<Dim>& boundary, CellId c,
-                const PoissonOptions& options, rbf::WeightCache<Dim>* cache, RowScratch<Dim>& scratch, Row& row,
-                rbf::Status& status) {
+RowKind rbf_row(const CellGraph<Dim>& graph, const DofLayout<Dim>& layout, const Boundary<Dim>& boundary,
+                CellId c, const PoissonOptions& options, rbf::WeightCache<Dim>* cache,
+                RowScratch<Dim>& scratch, Row& row, rbf::Status& status) {
   const int i = layout.dof_of_cell[c];
   const Vec<Dim> x = graph.centre(c);
   const CellId seed[1] = {c};
@@ -105,8 +105,9 @@ RowKind rbf_row(const CellGraph<Dim>& graph, const DofLayout<Dim>& layout, const
       row.rhs = nd.value;
       return RowKind::on_interface;
     }
-  status = stencil_weights<Dim>(nodes, x, rbf::Operator<Dim>::lap(), options.rbf, scratch.w, scratch.n_retried,
-                                cache_for<Dim>(nodes, boundary, cache), graph.cell_size(c)[0]);
+  status =
+      stencil_weights<Dim>(nodes, x, rbf::Operator<Dim>::lap(), options.rbf, scratch.w, scratch.n_retried,
+                           cache_for<Dim>(nodes, boundary, cache), graph.cell_size(c)[0]);
   LIQUID_VERIFY(status.usable(), "cell {} at ({:.6g}): RBF-FD Laplacian weights unusable: {}", c,
                 fmt::join(x.data(), x.data() + Dim, ", "), status.describe());
   for (std::size_t j = 0; j < nodes.size(); ++j) {

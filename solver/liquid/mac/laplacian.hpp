@@ -64,15 +64,15 @@ bool regular_neighbourhood(const CellGraph<Dim>& graph, CellId c);
 /// Adds the FD row of -Lap p at the regular cell c to `row` (whose rhs already holds -f); a centre
 /// on the interface becomes p_c = value. Returns RowKind::fd or RowKind::on_interface.
 template <int Dim>
-RowKind fd_row(const CellGraph<Dim>& graph, const DofLayout<Dim>& layout, const Boundary<Dim>& boundary, CellId c,
-               Row& row);
+RowKind fd_row(const CellGraph<Dim>& graph, const DofLayout<Dim>& layout, const Boundary<Dim>& boundary,
+               CellId c, Row& row);
 
 /// Adds the RBF-FD row of -Lap p at cell c to `row`; a centre within 1e-3 cell sizes of the
 /// interface takes the interface value (RowKind::on_interface). `status` receives the weights'
 /// status. Throws liquid::Error naming the cell when no usable weights exist.
 template <int Dim>
-RowKind rbf_row(const CellGraph<Dim>& graph, const DofLayout<Dim>& layout, const Boundary<Dim>& boundary, CellId c,
-                const PoissonOptions& options, rbf::WeightCache<Dim>* cache, RowScratch<Dim>& scratch, Row& row,
-                rbf::Status& status);
+RowKind rbf_row(const CellGraph<Dim>& graph, const DofLayout<Dim>& layout, const Boundary<Dim>& boundary,
+                CellId c, const PoissonOptions& options, rbf::WeightCache<Dim>* cache,
+                RowScratch<Dim>& scratch, Row& row, rbf::Status& status);
 
 }  // namespace liquid::mac

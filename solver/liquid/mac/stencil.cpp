@@ -196,9 +196,9 @@ void gather_stencil(const CellGraph<Dim>& graph, const DofLayout<Dim>& layout, c
 }
 
 template <int Dim>
-rbf::Status stencil_weights(std::vector<StencilNode<Dim>>& nodes, const Vec<Dim>& at, const rbf::Operator<Dim>& op,
-                            const rbf::Config& config, std::vector<double>& w, long& n_retried,
-                            rbf::WeightCache<Dim>* cache, double h) {
+rbf::Status stencil_weights(std::vector<StencilNode<Dim>>& nodes, const Vec<Dim>& at,
+                            const rbf::Operator<Dim>& op, const rbf::Config& config, std::vector<double>& w,
+                            long& n_retried, rbf::WeightCache<Dim>* cache, double h) {
   thread_local std::vector<Vec<Dim>> xs;
   thread_local std::vector<int> order;
   thread_local std::vector<StencilNode<Dim>> sorted;
@@ -217,7 +217,8 @@ rbf::Status stencil_weights(std::vector<StencilNode<Dim>>& nodes, const Vec<Dim>
   }
   const auto solve = [&] {
     positions();
-    return cache != nullptr ? cache->weights(xs, at, h, op, config, w) : rbf::weights<Dim>(xs, at, op, config, w);
+    return cache != nullptr ? cache->weights(xs, at, h, op, config, w)
+                            : rbf::weights<Dim>(xs, at, op, config, w);
   };
   for (int attempt = 0; attempt < 4; ++attempt) {
     const rbf::Status st = solve();

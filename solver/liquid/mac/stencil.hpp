@@ -57,9 +57,9 @@ void gather_stencil(const CellGraph<Dim>& graph, const DofLayout<Dim>& layout, c
 /// first put in rbf::canonical_order (so congruent stencils share one solve; the weights follow
 /// their nodes) and looked up at scale `h`. Returns the status of the final attempt.
 template <int Dim>
-rbf::Status stencil_weights(std::vector<StencilNode<Dim>>& nodes, const Vec<Dim>& at, const rbf::Operator<Dim>& op,
-                            const rbf::Config& config, std::vector<double>& w, long& n_retried,
-                            rbf::WeightCache<Dim>* cache = nullptr, double h = 0.0);
+rbf::Status stencil_weights(std::vector<StencilNode<Dim>>& nodes, const Vec<Dim>& at,
+                            const rbf::Operator<Dim>& op, const rbf::Config& config, std::vector<double>& w,
+                            long& n_retried, rbf::WeightCache<Dim>* cache = nullptr, double h = 0.0);
 
 /// The cache for a stencil's weights: none when it holds an interface crossing (a level-set
 /// problem's known node), whose position is arbitrary and would only fill the cache.

@@ -27,8 +27,8 @@ void concat(std::vector<std::vector<CellId>>& parts, std::vector<CellId>& out) {
 }  // namespace
 
 template <int Dim>
-void mark_narrow_band(const CellGraph<Dim>& graph, const levelset::Function<Dim>& phi, int coarse_level, int fine_level,
-                      double band, std::span<const CellId> cells, MarkList& marks) {
+void mark_narrow_band(const CellGraph<Dim>& graph, const levelset::Function<Dim>& phi, int coarse_level,
+                      int fine_level, double band, std::span<const CellId> cells, MarkList& marks) {
   LIQUID_VERIFY(coarse_level >= 0 && coarse_level <= fine_level && fine_level <= morton::max_level<Dim>,
                 "tree::mark_narrow_band: levels must satisfy 0 <= {} <= {} <= {}", coarse_level, fine_level,
                 morton::max_level<Dim>);
@@ -168,7 +168,8 @@ void NarrowBandTracker<Dim>::gather(const CellGraph<Dim>& graph) {
 }
 
 template <int Dim>
-void NarrowBandTracker<Dim>::mark(const CellGraph<Dim>& graph, const levelset::Function<Dim>& phi, MarkList& marks) {
+void NarrowBandTracker<Dim>::mark(const CellGraph<Dim>& graph, const levelset::Function<Dim>& phi,
+                                  MarkList& marks) {
   if (first_) {
     first_ = false;
     candidates_ = graph.cell_ids();
@@ -179,9 +180,9 @@ void NarrowBandTracker<Dim>::mark(const CellGraph<Dim>& graph, const levelset::F
   mark_narrow_band<Dim>(graph, phi, coarse_, fine_, band_, candidates_, marks);
 }
 
-#define LIQUID_BAND_TRACKER(D)                                                                 \
+#define LIQUID_BAND_TRACKER(D)                                                                           \
   template void mark_narrow_band<D>(const CellGraph<D>&, const levelset::Function<D>&, int, int, double, \
-                                    std::span<const CellId>, MarkList&);                       \
+                                    std::span<const CellId>, MarkList&);                                 \
   template class NarrowBandTracker<D>;
 LIQUID_BAND_TRACKER(2)
 LIQUID_BAND_TRACKER(3)

@@ -32,8 +32,8 @@ namespace liquid::tree {
 /// `cells` (dead ids skipped): split where the rule refines a leaf, merge where it would not refine
 /// the leaf's parent. `marks` (out) is cleared first. Uses OpenMP.
 template <int Dim>
-void mark_narrow_band(const CellGraph<Dim>& graph, const levelset::Function<Dim>& phi, int coarse_level, int fine_level,
-                      double band, std::span<const CellId> cells, MarkList& marks);
+void mark_narrow_band(const CellGraph<Dim>& graph, const levelset::Function<Dim>& phi, int coarse_level,
+                      int fine_level, double band, std::span<const CellId> cells, MarkList& marks);
 
 template <int Dim>
 class NarrowBandTracker {

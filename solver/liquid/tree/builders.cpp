@@ -68,8 +68,8 @@ bool narrow_band_refines(const TreeNode<Dim>& node, const levelset::Function<Dim
 }
 
 template <int Dim>
-CellGraph<Dim> narrow_band(const Box<Dim>& domain, const levelset::Function<Dim>& phi, int coarse_level, int fine_level,
-                           double band, const CellGraphOptions<Dim>& options) {
+CellGraph<Dim> narrow_band(const Box<Dim>& domain, const levelset::Function<Dim>& phi, int coarse_level,
+                           int fine_level, double band, const CellGraphOptions<Dim>& options) {
   check_levels<Dim>(coarse_level, fine_level, "narrow_band");
   LIQUID_VERIFY(band > 0.0, "tree::narrow_band: the band width must be positive (got {})", band);
   const double h = finest_size(domain, fine_level);
@@ -82,8 +82,8 @@ CellGraph<Dim> narrow_band(const Box<Dim>& domain, const levelset::Function<Dim>
 }
 
 template <int Dim>
-Mark narrow_band_mark(const CellGraph<Dim>& graph, CellId c, const levelset::Function<Dim>& phi, int coarse_level,
-                      int fine_level, double band, double fine_size) {
+Mark narrow_band_mark(const CellGraph<Dim>& graph, CellId c, const levelset::Function<Dim>& phi,
+                      int coarse_level, int fine_level, double band, double fine_size) {
   const TreeNode<Dim> node{graph.level(c), graph.address(c), graph.box(c)};
   if (narrow_band_refines(node, phi, coarse_level, fine_level, band, fine_size)) return Mark::split;
   if (node.level == 0) return Mark::keep;
@@ -101,8 +101,8 @@ Mark narrow_band_mark(const CellGraph<Dim>& graph, CellId c, const levelset::Fun
 }
 
 template <int Dim>
-void mark_narrow_band(const CellGraph<Dim>& graph, const levelset::Function<Dim>& phi, int coarse_level, int fine_level,
-                      double band, std::vector<Mark>& marks) {
+void mark_narrow_band(const CellGraph<Dim>& graph, const levelset::Function<Dim>& phi, int coarse_level,
+                      int fine_level, double band, std::vector<Mark>& marks) {
   check_levels<Dim>(coarse_level, fine_level, "mark_narrow_band");
   const double h = finest_size(graph.domain(), fine_level);
   marks.assign(static_cast<std::size_t>(graph.cell_capacity()), Mark::keep);
@@ -151,18 +151,19 @@ CellGraph<Dim> random(const Box<Dim>& domain, std::uint64_t seed, int min_level,
       options);
 }
 
-#define LIQUID_TREE_BUILDERS(D)                                                                           \
-  template CellGraph<D> uniform<D>(const Box<D>&, int, const CellGraphOptions<D>&);                       \
-  template CellGraph<D> banded<D>(const Box<D>&, const levelset::Function<D>&, int, double,                         \
-                                  const CellGraphOptions<D>&);                                            \
-  template bool narrow_band_refines<D>(const TreeNode<D>&, const levelset::Function<D>&, int, int, double, double); \
-  template Mark narrow_band_mark<D>(const CellGraph<D>&, CellId, const levelset::Function<D>&, int, int, double,    \
-                                    double);                                                              \
-  template CellGraph<D> narrow_band<D>(const Box<D>&, const levelset::Function<D>&, int, int, double,               \
-                                       const CellGraphOptions<D>&);                                       \
-  template void mark_narrow_band<D>(const CellGraph<D>&, const levelset::Function<D>&, int, int, double,            \
-                                    std::vector<Mark>&);                                                  \
-  template CellGraph<D> refined<D>(const CellGraph<D>&, int, CellGraphOptions<D>);                        \
+#define LIQUID_TREE_BUILDERS(D)                                                                            \
+  template CellGraph<D> uniform<D>(const Box<D>&, int, const CellGraphOptions<D>&);                        \
+  template CellGraph<D> banded<D>(const Box<D>&, const levelset::Function<D>&, int, double,                \
+                                  const CellGraphOptions<D>&);                                             \
+  template bool narrow_band_refines<D>(const TreeNode<D>&, const levelset::Function<D>&, int, int, double, \
+                                       double);                                                            \
+  template Mark narrow_band_mark<D>(const CellGraph<D>&, CellId, const levelset::Function<D>&, int, int,   \
+                                    double, double);                                                       \
+  template CellGraph<D> narrow_band<D>(const Box<D>&, const levelset::Function<D>&, int, int, double,      \
+                                       const CellGraphOptions<D>&);                                        \
+  template void mark_narrow_band<D>(const CellGraph<D>&, const levelset::Function<D>&, int, int, double,   \
+                                    std::vector<Mark>&);                                                   \
+  template CellGraph<D> refined<D>(const CellGraph<D>&, int, CellGraphOptions<D>);                         \
   template CellGraph<D> random<D>(const Box<D>&, std::uint64_t, int, int, double, CellGraphOptions<D>);
 LIQUID_TREE_BUILDERS(2)
 LIQUID_TREE_BUILDERS(3)

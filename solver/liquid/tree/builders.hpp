@@ -23,14 +23,14 @@ CellGraph<Dim> uniform(const Box<Dim>& domain, int level, const CellGraphOptions
 /// Level `level` everywhere, level + 1 within 2 * band finest cells of phi's zero set and level + 2
 /// within band finest cells (finest = level + 2; band > 0).
 template <int Dim>
-CellGraph<Dim> banded(const Box<Dim>& domain, const levelset::Function<Dim>& phi, int level, double band = 3.0,
-                      const CellGraphOptions<Dim>& options = {});
+CellGraph<Dim> banded(const Box<Dim>& domain, const levelset::Function<Dim>& phi, int level,
+                      double band = 3.0, const CellGraphOptions<Dim>& options = {});
 
 /// Level `fine_level` within `band` cells of that level around phi's zero set, as coarse as the
 /// level jump allows elsewhere but never coarser than `coarse_level` (coarse_level <= fine_level).
 template <int Dim>
-CellGraph<Dim> narrow_band(const Box<Dim>& domain, const levelset::Function<Dim>& phi, int coarse_level, int fine_level,
-                           double band = 2.0, const CellGraphOptions<Dim>& options = {});
+CellGraph<Dim> narrow_band(const Box<Dim>& domain, const levelset::Function<Dim>& phi, int coarse_level,
+                           int fine_level, double band = 2.0, const CellGraphOptions<Dim>& options = {});
 
 /// The refinement rule of narrow_band() for one node (true: split it).
 template <int Dim>
@@ -40,16 +40,16 @@ bool narrow_band_refines(const TreeNode<Dim>& node, const levelset::Function<Dim
 /// What the narrow-band rule asks of leaf c: split when it refines c, merge when it would not
 /// refine c's parent, else keep (fine_size: the cell size at fine_level along the longest axis).
 template <int Dim>
-Mark narrow_band_mark(const CellGraph<Dim>& graph, CellId c, const levelset::Function<Dim>& phi, int coarse_level,
-                      int fine_level, double band, double fine_size);
+Mark narrow_band_mark(const CellGraph<Dim>& graph, CellId c, const levelset::Function<Dim>& phi,
+                      int coarse_level, int fine_level, double band, double fine_size);
 
 /// Marks an existing graph towards narrow_band(phi, coarse_level, fine_level, band): split where
 /// the rule refines a leaf, merge where it would not refine the leaf's parent. Visits every cell;
 /// `marks` (out) is resized to graph.cell_capacity() and reset first. Uses OpenMP. To re-adapt at
 /// a cost proportional to the band instead, see NarrowBandTracker (band_tracker.hpp).
 template <int Dim>
-void mark_narrow_band(const CellGraph<Dim>& graph, const levelset::Function<Dim>& phi, int coarse_level, int fine_level,
-                      double band, std::vector<Mark>& marks);
+void mark_narrow_band(const CellGraph<Dim>& graph, const levelset::Function<Dim>& phi, int coarse_level,
+                      int fine_level, double band, std::vector<Mark>& marks);
 
 /// `base` with every leaf split `extra` times: the tree of the next rows of a convergence study in
 /// which "every level shifts by one per row" (the paper's recursive subdivision). Level jumps are

@@ -104,14 +104,17 @@ void inhomogeneous_neumann_quadratic_is_exact() {
   PoissonProblem<Dim> problem;
   problem.f = quad_laplacian<Dim>;
   problem.pin_value = quad<Dim>;
-  problem.boundary.wall_flux = [](const Vec<Dim>& x, const Vec<Dim>& n) { return quad_gradient<Dim>(x).dot(n); };
+  problem.boundary.wall_flux = [](const Vec<Dim>& x, const Vec<Dim>& n) {
+    return quad_gradient<Dim>(x).dot(n);
+  };
   const PoissonSystem<Dim> sys = assemble_poisson<Dim>(graph, problem, PoissonOptions{});
   ASSERT_TRUE(sys.singular);
   EXPECT_NE(sys.pinned, no_cell);
   EXPECT_LT(direct_error_against_quad<Dim>(graph, sys), 1e-8);
   // Without the flux the same system misses p by O(1): the test can fail.
   problem.boundary.wall_flux = nullptr;
-  EXPECT_GT(direct_error_against_quad<Dim>(graph, assemble_poisson<Dim>(graph, problem, PoissonOptions{})), 0.1);
+  EXPECT_GT(direct_error_against_quad<Dim>(graph, assemble_poisson<Dim>(graph, problem, PoissonOptions{})),
+            0.1);
 }
 
 TEST(Poisson, InhomogeneousNeumannQuadraticIsExactOnNonGradedQuadtree) {
@@ -145,7 +148,8 @@ TEST(Poisson, NonFiniteRightHandSideNamesTheCell) {
     (void)assemble_poisson<2>(graph, problem, PoissonOptions{});
     FAIL() << "no error";
   } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find("right-hand side f is nan at the centre"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("right-hand side f is nan at the centre"), std::string::npos)
+        << e.what();
     EXPECT_NE(std::string(e.what()).find("of cell"), std::string::npos) << e.what();
   }
 }

@@ -3,9 +3,9 @@
 
 #include <cmath>
 
-#include "support/stencils.hpp"
 #include "liquid/core/error.hpp"
 #include "liquid/rbf/interpolant.hpp"
+#include "support/stencils.hpp"
 
 namespace liquid::rbf {
 namespace {

@@ -4,9 +4,9 @@
 
 #include <omp.h>
 
-#include "support/stencils.hpp"
 #include "liquid/core/error.hpp"
 #include "liquid/rbf/weight_cache.hpp"
+#include "support/stencils.hpp"
 
 namespace liquid::rbf {
 namespace {
@@ -77,7 +77,7 @@ TEST(WeightCache, UnusableStencilsAreCachedAsUnusable) {
 // not on the quantum (a cell side a third of another) is computed directly and not stored.
 TEST(WeightCache, EntriesDependOnTheKeyAloneAndOffQuantumStencilsBypass) {
   const auto base = support::quadtree_stencil<2>(1, 1.0, 9u);
-  const double h = 0.0625 * 3.141592653589793;       // cells of a box of side pi, as on a tree
+  const double h = 0.0625 * 3.141592653589793;          // cells of a box of side pi, as on a tree
   const Vec<2> here(0.1, 0.7), there(1234.567, 89.01);  // nodes - at rounds differently
   const auto place = [&](const Vec<2>& at) {
     std::vector<Vec<2>> nodes;

@@ -6,11 +6,11 @@
 
 #include <Eigen/SVD>
 
-#include "support/stencils.hpp"
 #include "liquid/core/error.hpp"
 #include "liquid/rbf/polynomial.hpp"
 #include "liquid/rbf/saddle.hpp"
 #include "liquid/rbf/weights.hpp"
+#include "support/stencils.hpp"
 
 namespace liquid::rbf {
 namespace {

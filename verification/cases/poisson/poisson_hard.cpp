@@ -20,10 +20,10 @@
 
 #include <fmt/format.h>
 
-#include "studies/poisson_study.hpp"
 #include "liquid/core/error.hpp"
 #include "liquid/levelset/levelset.hpp"
 #include "liquid/tree/builders.hpp"
+#include "studies/poisson_study.hpp"
 #include "support/manufactured.hpp"
 
 namespace liquid::verification {
@@ -65,8 +65,8 @@ struct Scenario {
 CaseResult run(const CaseOptions& options) {
   // The scenarios fix their own jumps, solver and scheme (only --levels A:B sets the base level A).
   const int L = options.levels ? options.levels->first : (options.full ? 6 : 5);
-  LIQUID_VERIFY(L >= 2 && L <= 12, "poisson-hard: --levels A:B sets the base level A, which must be in 2..12 (got {})",
-                L);
+  LIQUID_VERIFY(L >= 2 && L <= 12,
+                "poisson-hard: --levels A:B sets the base level A, which must be in 2..12 (got {})", L);
   const Box<2> square{Vec<2>::Zero(), Vec<2>::Constant(pi)};
   std::vector<Scenario> scenarios;
   for (std::uint64_t seed : {11u, 12u}) {
@@ -158,7 +158,9 @@ CaseResult run(const CaseOptions& options) {
 
 LIQUID_VERIFICATION_CASE(
     {"poisson-hard",
-     "stability: jumps 3-4, random trees, interface 1e-6 h from a centre, near-collinear stencils", true,
-     run, {Option::levels}});
+     "stability: jumps 3-4, random trees, interface 1e-6 h from a centre, near-collinear stencils",
+     true,
+     run,
+     {Option::levels}});
 
 }  // namespace liquid::verification

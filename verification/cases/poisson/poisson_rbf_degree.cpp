@@ -25,10 +25,10 @@
 
 #include <algorithm>
 
-#include "studies/paper_studies.hpp"
 #include "common/fit.hpp"
-#include "studies/poisson_study.hpp"
 #include "liquid/core/error.hpp"
+#include "studies/paper_studies.hpp"
+#include "studies/poisson_study.hpp"
 
 namespace liquid::verification {
 namespace {

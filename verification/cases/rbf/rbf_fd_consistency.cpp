@@ -28,9 +28,9 @@
 
 #include "common/case.hpp"
 #include "common/fit.hpp"
-#include "support/stencils.hpp"
 #include "liquid/rbf/polynomial.hpp"
 #include "liquid/rbf/weights.hpp"
+#include "support/stencils.hpp"
 
 namespace liquid::verification {
 namespace {
@@ -63,8 +63,9 @@ struct TestFunction {
 // Unit-scale stencil (h = 1): the 2M + 1 nodes nearest the origin, the origin first.
 template <int Dim>
 std::vector<Vec<Dim>> unit_stencil(const std::string& kind, int degree, unsigned seed) {
-  std::vector<Vec<Dim>> all = kind == "jittered" ? support::jittered_stencil<Dim>(Dim == 2 ? 4 : 2, 1.0, 0.35, seed)
-                                                 : support::quadtree_stencil<Dim>(Dim == 2 ? 3 : 2, 1.0, seed);
+  std::vector<Vec<Dim>> all = kind == "jittered"
+                                  ? support::jittered_stencil<Dim>(Dim == 2 ? 4 : 2, 1.0, 0.35, seed)
+                                  : support::quadtree_stencil<Dim>(Dim == 2 ? 3 : 2, 1.0, seed);
   std::stable_sort(all.begin(), all.end(),
                    [](const Vec<Dim>& p, const Vec<Dim>& q) { return p.squaredNorm() < q.squaredNorm(); });
   const std::size_t n =
@@ -249,6 +250,7 @@ CaseResult run(const CaseOptions&) {
 
 LIQUID_VERIFICATION_CASE(
     {"rbf-fd-consistency",
-     "RBF-FD weights: polynomial reproduction and convergence orders, 2D/3D, s=3,5,7, m=1..4", true, run, no_options});
+     "RBF-FD weights: polynomial reproduction and convergence orders, 2D/3D, s=3,5,7, m=1..4", true, run,
+     no_options});
 
 }  // namespace liquid::verification

@@ -131,10 +131,11 @@ CaseResult run(const CaseOptions& options) {
   LIQUID_VERIFY(first >= 0 && last >= first + 1 && last <= 20,
                 "cellgraph-invariants: --levels {}:{} needs 0 <= A < B <= 20", first, last);
   // Every tree holds at least its first level in 3D: refuse before building past the budget.
-  LIQUID_VERIFY(options.max_cells <= 0 || std::ldexp(1.0, 3 * first) <= double(options.max_cells),
-                "--levels {}:{}: a 3D tree from level {} has at least {:.3g} cells, over the budget of {} cells "
-                "(--max-cells N raises it)",
-                first, last, first, std::ldexp(1.0, 3 * first), options.max_cells);
+  LIQUID_VERIFY(
+      options.max_cells <= 0 || std::ldexp(1.0, 3 * first) <= double(options.max_cells),
+      "--levels {}:{}: a 3D tree from level {} has at least {:.3g} cells, over the budget of {} cells "
+      "(--max-cells N raises it)",
+      first, last, first, std::ldexp(1.0, 3 * first), options.max_cells);
   const int n_steps = options.full ? 100 : 25;
   std::vector<std::string> written;
 
@@ -171,7 +172,9 @@ CaseResult run(const CaseOptions& options) {
 
 LIQUID_VERIFICATION_CASE(
     {"cellgraph-invariants",
-     "Cellgraph invariants on random non-graded trees, 2D and 3D, every level-jump limit", true, run,
+     "Cellgraph invariants on random non-graded trees, 2D and 3D, every level-jump limit",
+     true,
+     run,
      {Option::levels, Option::max_jump, Option::trees}});
 
 }  // namespace
