@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <charconv>
+#include <initializer_list>
 #include <map>
 #include <regex>
 
@@ -14,17 +15,19 @@ namespace liquid::verification {
 
 namespace {
 
-const std::map<std::string, linalg::SolverKind> solver_names{
-    {"bicgstab-jacobi", linalg::SolverKind::bicgstab_jacobi},
-    {"bicgstab-ilut", linalg::SolverKind::bicgstab_ilut},
-    {"cg-ic", linalg::SolverKind::cg_ic},
-    {"cg-jacobi", linalg::SolverKind::cg_jacobi},
-    {"direct", linalg::SolverKind::direct}};
-const std::map<std::string, mac::StencilRule> stencil_names{{"nearest", mac::StencilRule::nearest},
-                                                            {"face-grown", mac::StencilRule::face_grown},
-                                                            {"ring", mac::StencilRule::ring}};
-const std::map<std::string, RowProtocol> row_names{{"refine", RowProtocol::refine},
-                                                   {"rebuild", RowProtocol::rebuild}};
+// The names come from the library's own to_string, so the command line and the library agree.
+template <class E>
+std::map<std::string, E> names_of(std::initializer_list<E> values) {
+  std::map<std::string, E> out;
+  for (E v : values) out.emplace(to_string(v), v);
+  return out;
+}
+const std::map<std::string, linalg::SolverKind> solver_names =
+    names_of({linalg::SolverKind::bicgstab_jacobi, linalg::SolverKind::bicgstab_ilut,
+              linalg::SolverKind::cg_ic, linalg::SolverKind::cg_jacobi, linalg::SolverKind::direct});
+const std::map<std::string, mac::StencilRule> stencil_names =
+    names_of({mac::StencilRule::nearest, mac::StencilRule::face_grown, mac::StencilRule::ring});
+const std::map<std::string, RowProtocol> row_names = names_of({RowProtocol::refine, RowProtocol::rebuild});
 const std::map<std::string, mac::Nullspace> nullspace_names{{"pin", mac::Nullspace::pin},
                                                             {"zero-mean", mac::Nullspace::zero_mean}};
 const std::map<std::string, Perturbation> perturb_names{{"first-order", Perturbation::first_order}};
