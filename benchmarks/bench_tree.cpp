@@ -182,7 +182,7 @@ void BM_TreeReadapt(benchmark::State& state) {
   Stopwatch watch;
   const CellGraph<3> rebuilt = tree::narrow_band<3>(Box<3>{}, sphere(centre, radius), coarse, fine, band);
   const double full_build = watch.seconds();
-  tree::NarrowBandTracker<3> tracker(g, coarse, fine, band);
+  NarrowBandTracker<3> tracker(g, coarse, fine, band);
   std::vector<Mark> marks;
   MarkList list;
   long changed = 0, steps = 0, visited = 0;

@@ -52,6 +52,15 @@ void mark_narrow_band(const CellGraph<Dim>& graph, const levelset::Function<Dim>
   concat(merge, marks.merge);
 }
 
+template void mark_narrow_band<2>(const CellGraph<2>&, const levelset::Function<2>&, int, int, double,
+                                  std::span<const CellId>, MarkList&);
+template void mark_narrow_band<3>(const CellGraph<3>&, const levelset::Function<3>&, int, int, double,
+                                  std::span<const CellId>, MarkList&);
+
+}  // namespace liquid::tree
+
+namespace liquid {
+
 template <int Dim>
 NarrowBandTracker<Dim>::NarrowBandTracker(const CellGraph<Dim>& graph, int coarse_level, int fine_level,
                                           double band, double max_motion)
@@ -159,7 +168,7 @@ void NarrowBandTracker<Dim>::gather(const CellGraph<Dim>& graph) {
         }
       }
     }
-    concat(parts, next_);
+    tree::concat(parts, next_);
     candidates_.insert(candidates_.end(), next_.begin(), next_.end());
     frontier_.swap(next_);
     from = &frontier_;
@@ -177,15 +186,10 @@ void NarrowBandTracker<Dim>::mark(const CellGraph<Dim>& graph, const levelset::F
   } else {
     gather(graph);
   }
-  mark_narrow_band<Dim>(graph, phi, coarse_, fine_, band_, candidates_, marks);
+  tree::mark_narrow_band<Dim>(graph, phi, coarse_, fine_, band_, candidates_, marks);
 }
 
-#define LIQUID_BAND_TRACKER(D)                                                                           \
-  template void mark_narrow_band<D>(const CellGraph<D>&, const levelset::Function<D>&, int, int, double, \
-                                    std::span<const CellId>, MarkList&);                                 \
-  template class NarrowBandTracker<D>;
-LIQUID_BAND_TRACKER(2)
-LIQUID_BAND_TRACKER(3)
-#undef LIQUID_BAND_TRACKER
+template class NarrowBandTracker<2>;
+template class NarrowBandTracker<3>;
 
-}  // namespace liquid::tree
+}  // namespace liquid

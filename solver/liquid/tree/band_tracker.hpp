@@ -11,7 +11,7 @@
 // (more when the band plus the motion exceeds a coarse cell). Cells far from the band are never
 // visited. The first call visits every cell, so the tracker can start from any graph.
 //
-//   tree::NarrowBandTracker<3> band(graph, coarse, fine, 1.0);
+//   NarrowBandTracker<3> band(graph, coarse, fine, 1.0);
 //   MarkList marks;
 //   for (each step) {
 //     band.mark(graph, phi, marks);
@@ -35,6 +35,11 @@ template <int Dim>
 void mark_narrow_band(const CellGraph<Dim>& graph, const levelset::Function<Dim>& phi, int coarse_level,
                       int fine_level, double band, std::span<const CellId> cells, MarkList& marks);
 
+}  // namespace liquid::tree
+
+namespace liquid {
+
+// Types live in namespace liquid; groups of free functions (the builders) in liquid::tree (STYLE.md).
 template <int Dim>
 class NarrowBandTracker {
  public:
@@ -73,4 +78,4 @@ class NarrowBandTracker {
 extern template class NarrowBandTracker<2>;
 extern template class NarrowBandTracker<3>;
 
-}  // namespace liquid::tree
+}  // namespace liquid

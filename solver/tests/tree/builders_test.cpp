@@ -246,7 +246,7 @@ TYPED_TEST(BuildersTest, BandTrackerMarksWhatAFullVisitMarks) {
         auto dense =
             tree::narrow_band<Dim>(Box<Dim>{}, sphere<Dim>(centre, radius), coarse, fine, band, options);
         auto sparse = dense;
-        tree::NarrowBandTracker<Dim> tracker(sparse, coarse, fine, band);
+        NarrowBandTracker<Dim> tracker(sparse, coarse, fine, band);
         std::vector<Mark> marks;
         MarkList list;
         // The first call visits every cell. A fresh tree can already carry marks: merges of the
@@ -297,7 +297,7 @@ TYPED_TEST(BuildersTest, BandTrackerConvergesToAFreshBuild) {
     SCOPED_TRACE(::testing::Message() << "start level " << start);
     Vec<Dim> centre = Vec<Dim>::Constant(0.5);
     auto g = tree::uniform<Dim>(Box<Dim>{}, start, options);
-    tree::NarrowBandTracker<Dim> tracker(g, coarse, fine, 2.0);
+    NarrowBandTracker<Dim> tracker(g, coarse, fine, 2.0);
     MarkList marks;
     for (int step = 0; step < 40; ++step) {
       if (step % 4 == 3 && step < 30) centre[0] += h;  // every fourth round, by one fine cell
@@ -327,7 +327,7 @@ TYPED_TEST(BuildersTest, BandTrackerOnAnisotropicCells) {
     centre[0] = 1.5;
     auto dense = tree::narrow_band<Dim>(domain, sphere<Dim>(centre, 0.3), coarse, fine, band);
     auto sparse = dense;
-    tree::NarrowBandTracker<Dim> tracker(sparse, coarse, fine, band);
+    NarrowBandTracker<Dim> tracker(sparse, coarse, fine, band);
     std::vector<Mark> marks;
     MarkList list;
     tracker.mark(sparse, sphere<Dim>(centre, 0.3), list);
