@@ -58,6 +58,18 @@ Eigen::RowVectorXd Interpolant<Dim>::value(const Vec<Dim>& x) const {
 }
 
 template <int Dim>
+double Interpolant<Dim>::value_at(const Vec<Dim>& x, int column) const {
+  LIQUID_VERIFY(coefficients_.size() > 0, "RBF interpolant evaluated before fit()");
+  LIQUID_VERIFY(column >= 0 && column < coefficients_.cols(), "RBF interpolant has no field {}", column);
+  const Vec<Dim> z = (x - centre_) / radius_;
+  const int n = n_nodes();
+  double out = 0.0;
+  for (int j = 0; j < n; ++j) out += system_->kernel.value((z - nodes_[j]).norm()) * coefficients_(j, column);
+  for (int t = 0; t < system_->n_terms; ++t) out += system_->basis.value(t, z) * coefficients_(n + t, column);
+  return out;
+}
+
+template <int Dim>
 Eigen::MatrixXd Interpolant<Dim>::gradient(const Vec<Dim>& x) const {
   LIQUID_VERIFY(coefficients_.size() > 0, "RBF interpolant evaluated before fit()");
   const Vec<Dim> z = (x - centre_) / radius_;

@@ -36,6 +36,8 @@ class Interpolant {
 
   /// Interpolated fields at x (one entry per fitted column).
   Eigen::RowVectorXd value(const Vec<Dim>& x) const;
+  /// The fitted field `column` at x, without allocating (the transfers' inner loop).
+  double value_at(const Vec<Dim>& x, int column = 0) const;
   /// Gradient of every fitted field at x: row k holds d/dx_k.
   Eigen::MatrixXd gradient(const Vec<Dim>& x) const;
 

@@ -1,0 +1,165 @@
+#include "liquid/particles/seeding.hpp"
+
+#include <gsl/gsl_qrng.h>
+
+#include <algorithm>
+#include <cmath>
+#include <memory>
+
+#include "liquid/core/error.hpp"
+#include "liquid/core/parallel.hpp"
+
+namespace liquid {
+
+namespace {
+
+/// splitmix64: a well-mixed 64-bit hash, for reproducible jitter.
+std::uint64_t mix(std::uint64_t z) {
+  z += 0x9e3779b97f4a7c15ull;
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+  return z ^ (z >> 31);
+}
+
+/// The pattern points of one cell, in physical coordinates.
+template <int Dim>
+void cell_points(const CellGraph<Dim>& graph, CellId c, const std::vector<Vec<Dim>>& pattern, double jitter,
+                 std::uint64_t seed, std::vector<Vec<Dim>>& out) {
+  const Box<Dim> b = graph.box(c);
+  const double spacing = std::pow(static_cast<double>(pattern.size()), -1.0 / Dim);
+  out.clear();
+  for (std::size_t k = 0; k < pattern.size(); ++k) {
+    Vec<Dim> u = pattern[k];
+    if (jitter > 0.0) {
+      std::uint64_t h = mix(seed ^ mix(graph.key(c) ^ mix(k)));
+      for (int a = 0; a < Dim; ++a) {
+        h = mix(h);
+        const double r = static_cast<double>(h >> 11) * 0x1.0p-53 - 0.5;  // in [-0.5, 0.5)
+        u[a] = std::clamp(u[a] + jitter * spacing * r, 1e-6, 1.0 - 1e-6);
+      }
+    }
+    out.push_back(b.lo + u.cwiseProduct(b.size()));
+  }
+}
+
+template <int Dim>
+int default_count(int n) {
+  return n > 0 ? n : (1 << Dim);
+}
+
+}  // namespace
+
+template <int Dim>
+std::vector<Vec<Dim>> halton_points(int n) {
+  LIQUID_VERIFY(n >= 0, "halton_points: negative count {}", n);
+  std::unique_ptr<gsl_qrng, decltype(&gsl_qrng_free)> q(gsl_qrng_alloc(gsl_qrng_halton, Dim), &gsl_qrng_free);
+  LIQUID_VERIFY(q != nullptr, "GSL could not allocate a {}-dimensional Halton generator", Dim);
+  std::vector<Vec<Dim>> out(n);
+  double v[Dim];
+  for (int i = 0; i < n; ++i) {
+    gsl_qrng_get(q.get(), v);
+    for (int a = 0; a < Dim; ++a) out[i][a] = v[a];
+  }
+  return out;
+}
+
+template <int Dim>
+long seed_region(const CellGraph<Dim>& graph, const levelset::Function<Dim>& region,
+                 const SeedOptions& options, Particles<Dim>& particles, const VelocitySource<Dim>& velocity) {
+  LIQUID_VERIFY(options.jitter >= 0.0 && options.jitter < 1.0, "seed: jitter {} is outside [0, 1)",
+                options.jitter);
+  LIQUID_VERIFY(static_cast<bool>(region), "seed: no region given");
+  const int per_cell = default_count<Dim>(options.per_cell);
+  LIQUID_VERIFY(per_cell >= 1 && per_cell <= 4096, "seed: {} points per cell is outside [1, 4096]", per_cell);
+  const auto pattern = halton_points<Dim>(per_cell);
+  const std::vector<CellId> cells = graph.cell_ids();
+  // Per cell, the points inside the region; then appended in cell order.
+  std::vector<std::vector<Vec<Dim>>> kept(cells.size());
+  parallel_for(
+      static_cast<long>(cells.size()), [] { return std::vector<Vec<Dim>>{}; },
+      [&](std::vector<Vec<Dim>>& pts, long i) {
+        cell_points(graph, cells[i], pattern, options.jitter, options.seed, pts);
+        for (const auto& p : pts) {
+          const double phi = region(p);
+          LIQUID_VERIFY(std::isfinite(phi), "seed: the region's level set is not finite at ({})",
+                        fmt::join(p.data(), p.data() + Dim, ", "));
+          if (phi < 0.0) kept[i].push_back(p);
+        }
+      },
+      [](std::vector<Vec<Dim>>&) {}, 64);
+  const int first = particles.size();
+  std::vector<CellId> owner;
+  for (std::size_t i = 0; i < cells.size(); ++i)
+    for (const auto& p : kept[i]) {
+      particles.push_back(p, Vec<Dim>::Zero());
+      owner.push_back(cells[i]);
+    }
+  const long added = particles.size() - first;
+  if (velocity && added > 0)
+    velocity(std::span<const Vec<Dim>>(particles.x).subspan(first), owner,
+             std::span<Vec<Dim>>(particles.v).subspan(first));
+  return added;
+}
+
+template <int Dim>
+ReseedReport reseed(const CellGraph<Dim>& graph, std::span<const CellId> cells, const ReseedOptions& options,
+                    const VelocitySource<Dim>& velocity, Particles<Dim>& particles, CellBins& bins) {
+  const int lo = options.lo > 0 ? options.lo : (Dim == 2 ? 3 : 5);
+  const int hi = options.hi > 0 ? options.hi : (Dim == 2 ? 12 : 15);
+  const int per_cell = default_count<Dim>(options.per_cell);
+  LIQUID_VERIFY(lo <= hi, "reseed: range [{}, {}] is empty", lo, hi);
+  LIQUID_VERIFY(per_cell >= lo && per_cell <= hi,
+                "reseed: {} new particles per cell would leave the range [{}, {}] at once", per_cell, lo, hi);
+  LIQUID_VERIFY(static_cast<bool>(velocity), "reseed: no velocity source for the new particles");
+  LIQUID_VERIFY(bins.n_particles() == particles.size(), "reseed: bins hold {} particles, there are {}",
+                bins.n_particles(), particles.size());
+  ReseedReport report;
+  std::vector<std::uint8_t> remove(particles.size(), 0);
+  std::vector<CellId> chosen;
+  for (CellId c : cells) {
+    if (!graph.alive(c)) continue;
+    const int n = bins.count(c);
+    if (n == 0 || (n >= lo && n <= hi)) continue;
+    for (std::int32_t p : bins.of(c)) remove[p] = 1;
+    report.deleted += n;
+    chosen.push_back(c);
+  }
+  std::sort(chosen.begin(), chosen.end());
+  chosen.erase(std::unique(chosen.begin(), chosen.end()), chosen.end());
+  report.cells = static_cast<long>(chosen.size());
+  if (chosen.empty()) return report;
+
+  std::vector<std::int32_t> new_index;
+  particles.compact(remove, &new_index);
+  std::vector<CellId> cell_of(particles.size());
+  for (std::size_t i = 0; i < new_index.size(); ++i)
+    if (new_index[i] >= 0) cell_of[new_index[i]] = bins.cell[i];
+  const int first = particles.size();
+  const auto pattern = halton_points<Dim>(per_cell);
+  std::vector<Vec<Dim>> pts;
+  for (CellId c : chosen) {
+    cell_points(graph, c, pattern, options.jitter, options.seed, pts);
+    for (const auto& p : pts) {
+      particles.push_back(p, Vec<Dim>::Zero());
+      cell_of.push_back(c);
+    }
+  }
+  report.created = particles.size() - first;
+  velocity(std::span<const Vec<Dim>>(particles.x).subspan(first),
+           std::span<const CellId>(cell_of).subspan(first), std::span<Vec<Dim>>(particles.v).subspan(first));
+  bins.cell = std::move(cell_of);
+  bins.sort(graph.cell_capacity());
+  return report;
+}
+
+#define LIQUID_SEEDING(D)                                                                             \
+  template std::vector<Vec<D>> halton_points<D>(int);                                                 \
+  template long seed_region<D>(const CellGraph<D>&, const levelset::Function<D>&, const SeedOptions&, \
+                               Particles<D>&, const VelocitySource<D>&);                              \
+  template ReseedReport reseed<D>(const CellGraph<D>&, std::span<const CellId>, const ReseedOptions&, \
+                                  const VelocitySource<D>&, Particles<D>&, CellBins&);
+LIQUID_SEEDING(2)
+LIQUID_SEEDING(3)
+#undef LIQUID_SEEDING
+
+}  // namespace liquid

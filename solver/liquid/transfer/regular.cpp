@@ -1,0 +1,318 @@
+#include "liquid/transfer/regular.hpp"
+
+#include <cmath>
+
+#include <fmt/format.h>
+#include <Eigen/Geometry>
+
+#include "liquid/core/error.hpp"
+#include "liquid/core/parallel.hpp"
+
+namespace liquid {
+
+namespace {
+
+Eigen::Vector3d lift(const Vec<2>& a) {
+  return {a[0], a[1], 0.0};
+}
+Eigen::Vector3d lift(const Vec<3>& a) {
+  return a;
+}
+
+template <int Dim>
+Eigen::Vector3d axis_vector(int k) {
+  Eigen::Vector3d e = Eigen::Vector3d::Zero();
+  e[k] = 1.0;
+  return e;
+}
+
+}  // namespace
+
+template <int Dim>
+RegularLattice<Dim>::RegularLattice(const CellGraph<Dim>& graph) {
+  LIQUID_VERIFY(graph.n_cells() > 0, "RegularLattice: the graph has no cells");
+  level_ = graph.deepest_level();
+  LIQUID_VERIFY(level_ >= 1,
+                "RegularLattice: the tree is a single cell; the baselines need level 1 or finer");
+  graph.for_each_cell([&](CellId c) {
+    LIQUID_VERIFY(graph.level(c) == level_,
+                  "the regular PIC/FLIP/APIC transfers need a uniform tree: cell {} is at level {}, not {}",
+                  c, graph.level(c), level_);
+  });
+  n_ = 1L << level_;
+  lo_ = graph.domain().lo;
+  h_ = graph.domain().size() / static_cast<double>(n_);
+  long n_cells = 1;
+  for (int j = 0; j < Dim; ++j) n_cells *= n_;
+  cells_.assign(n_cells, no_cell);
+  for (int k = 0; k < Dim; ++k) {
+    long m = 1;
+    for (int j = 0; j < Dim; ++j) m *= extent(k, j);
+    faces_[k].assign(m, no_face);
+  }
+  graph.for_each_cell([&](CellId c) {
+    const IVec<Dim> a = graph.address(c);
+    cells_[flat_cell(a)] = c;
+    for (int k = 0; k < Dim; ++k)
+      for (int dir : {-1, 1})
+        graph.for_each_side_face(c, k, dir, [&](const SideFace& s) {
+          IVec<Dim> b = a;
+          if (dir > 0) ++b[k];
+          faces_[k][flat_face(k, b)] = s.face;
+        });
+  });
+}
+
+template <int Dim>
+long RegularLattice<Dim>::flat_cell(const IVec<Dim>& a) const {
+  long i = 0;
+  for (int j = Dim - 1; j >= 0; --j) i = i * n_ + a[j];
+  return i;
+}
+
+template <int Dim>
+long RegularLattice<Dim>::flat_face(int k, const IVec<Dim>& a) const {
+  long i = 0;
+  for (int j = Dim - 1; j >= 0; --j) i = i * extent(k, j) + a[j];
+  return i;
+}
+
+template <int Dim>
+CellId RegularLattice<Dim>::cell(const IVec<Dim>& a) const {
+  for (int j = 0; j < Dim; ++j)
+    if (a[j] < 0 || a[j] >= n_) return no_cell;
+  return cells_[flat_cell(a)];
+}
+
+template <int Dim>
+FaceId RegularLattice<Dim>::face(int k, const IVec<Dim>& a) const {
+  for (int j = 0; j < Dim; ++j)
+    if (a[j] < 0 || a[j] >= extent(k, j)) return no_face;
+  return faces_[k][flat_face(k, a)];
+}
+
+template <int Dim>
+Vec<Dim> RegularLattice<Dim>::face_position(int k, const IVec<Dim>& a) const {
+  Vec<Dim> x;
+  for (int j = 0; j < Dim; ++j) x[j] = lo_[j] + h_[j] * (static_cast<double>(a[j]) + (j == k ? 0.0 : 0.5));
+  return x;
+}
+
+template <int Dim>
+LinearStencil<Dim>::LinearStencil(const RegularLattice<Dim>& lattice, int k, const Vec<Dim>& x) {
+  for (int j = 0; j < Dim; ++j) {
+    const double s = (x[j] - lattice.origin()[j]) / lattice.h()[j] - (j == k ? 0.0 : 0.5);
+    const long last = lattice.extent(k, j) - 1;  // >= 1
+    if (s <= 0.0) {
+      base[j] = 0, t[j] = 0.0, clamped[j] = s < 0.0;
+    } else if (s >= static_cast<double>(last)) {
+      base[j] = last - 1, t[j] = 1.0, clamped[j] = s > static_cast<double>(last);
+    } else {
+      base[j] = std::min(static_cast<long>(std::floor(s)), last - 1);
+      t[j] = s - static_cast<double>(base[j]);
+    }
+  }
+}
+
+template <int Dim>
+double LinearStencil<Dim>::weight(int corner) const {
+  double w = 1.0;
+  for (int j = 0; j < Dim; ++j) w *= (corner >> j) & 1 ? t[j] : 1.0 - t[j];
+  return w;
+}
+
+template <int Dim>
+Vec<Dim> LinearStencil<Dim>::gradient(int corner, const Vec<Dim>& h) const {
+  Vec<Dim> g;
+  for (int j = 0; j < Dim; ++j) {
+    if (clamped[j]) {
+      g[j] = 0.0;
+      continue;
+    }
+    double w = ((corner >> j) & 1 ? 1.0 : -1.0) / h[j];
+    for (int i = 0; i < Dim; ++i)
+      if (i != j) w *= (corner >> i) & 1 ? t[i] : 1.0 - t[i];
+    g[j] = w;
+  }
+  return g;
+}
+
+template <int Dim>
+TransferReport linear_to_faces(const CellGraph<Dim>& graph, const RegularLattice<Dim>& lattice,
+                               const Particles<Dim>& particles, const CellBins& bins, RegularScheme scheme,
+                               std::span<const double> masses, FaceValues& out) {
+  LIQUID_VERIFY(bins.n_particles() == particles.size(),
+                "linear_to_faces: bins hold {} particles, there are {}", bins.n_particles(),
+                particles.size());
+  LIQUID_VERIFY(masses.empty() || static_cast<int>(masses.size()) == particles.size(),
+                "linear_to_faces: {} masses for {} particles", masses.size(), particles.size());
+  std::span<const double> affine;
+  if (scheme == RegularScheme::apic) affine = particles.field(particles.field_index("apic"));
+  out.reset(graph.face_capacity());
+  TransferReport total;
+  for (int k = 0; k < Dim; ++k) {
+    IVec<Dim> extent;
+    long n_faces = 1;
+    for (int j = 0; j < Dim; ++j) n_faces *= (extent[j] = lattice.extent(k, j));
+    parallel_for(
+        n_faces, [] { return TransferReport{}; },
+        [&](TransferReport& r, long flat) {
+          IVec<Dim> a;
+          for (int j = 0; j < Dim; ++j) {
+            a[j] = flat % extent[j];
+            flat /= extent[j];
+          }
+          const FaceId f = lattice.face(k, a);
+          const Vec<Dim> xf = lattice.face_position(k, a);
+          IVec<Dim> lo, hi;
+          for (int j = 0; j < Dim; ++j) {
+            lo[j] = std::max<long>(a[j] - 1, 0);
+            hi[j] = std::min<long>(j == k ? a[j] : a[j] + 1, lattice.n() - 1);
+          }
+          double sum = 0.0, mass = 0.0;
+          IVec<Dim> c = lo;
+          while (true) {
+            for (std::int32_t p : bins.of(lattice.cell(c))) {
+              const Vec<Dim>& xp = particles.x[p];
+              const LinearStencil<Dim> st(lattice, k, xp);
+              int corner = 0;
+              bool inside = true;
+              for (int j = 0; j < Dim; ++j) {
+                const long d = a[j] - st.base[j];
+                inside = inside && (d == 0 || d == 1);
+                corner |= static_cast<int>(d & 1) << j;
+              }
+              if (!inside) continue;
+              const double w = st.weight(corner) * (masses.empty() ? 1.0 : masses[p]);
+              if (w == 0.0) continue;
+              double u = particles.v[p][k];
+              if (!affine.empty())
+                for (int j = 0; j < Dim; ++j) u += affine[(p * Dim + k) * Dim + j] * (xf[j] - xp[j]);
+              sum += w * u;
+              mass += w;
+            }
+            int j = 0;  // next cell of the box, axis 0 fastest
+            for (; j < Dim; ++j) {
+              if (++c[j] <= hi[j]) break;
+              c[j] = lo[j];
+            }
+            if (j == Dim) break;
+          }
+          ++r.targets;
+          if (mass > 0.0) {
+            out.value[f] = sum / mass;
+            out.known[f] = 1;
+            out.weight[f] = mass;
+          } else {
+            ++r.empty;
+          }
+        },
+        [&](TransferReport& r) { total += r; }, 256);
+  }
+  total.max_degree_used = 1;
+  return total;
+}
+
+template <int Dim>
+TransferReport linear_to_points(const RegularLattice<Dim>& lattice, std::span<const double> u,
+                                std::span<const Vec<Dim>> x, std::span<Vec<Dim>> v,
+                                std::span<double> affine) {
+  LIQUID_VERIFY(v.size() == x.size(), "linear_to_points: {} outputs for {} points", v.size(), x.size());
+  LIQUID_VERIFY(affine.empty() || affine.size() == x.size() * Dim * Dim,
+                "linear_to_points: affine field of {} doubles for {} points", affine.size(), x.size());
+  parallel_for(
+      static_cast<long>(x.size()),
+      [&](long p) {
+        for (int k = 0; k < Dim; ++k) {
+          const LinearStencil<Dim> st(lattice, k, x[p]);
+          double value = 0.0;
+          Vec<Dim> grad = Vec<Dim>::Zero();
+          for (int corner = 0; corner < (1 << Dim); ++corner) {
+            IVec<Dim> a = st.base;
+            for (int j = 0; j < Dim; ++j) a[j] += (corner >> j) & 1;
+            const double uf = u[lattice.face(k, a)];
+            value += st.weight(corner) * uf;
+            if (!affine.empty()) grad += st.gradient(corner, lattice.h()) * uf;
+          }
+          LIQUID_VERIFY(std::isfinite(value), "linear_to_points: non-finite velocity at point {}", p);
+          v[p][k] = value;
+          if (!affine.empty())
+            for (int j = 0; j < Dim; ++j) affine[(p * Dim + k) * Dim + j] = grad[j];
+        }
+      },
+      1024);
+  TransferReport r;
+  r.targets = static_cast<long>(x.size()) * Dim;
+  r.max_degree_used = 1;
+  return r;
+}
+
+template <int Dim>
+Vec<Dim> particle_momentum(const Particles<Dim>& particles, std::span<const double> masses) {
+  Vec<Dim> m = Vec<Dim>::Zero();
+  for (int p = 0; p < particles.size(); ++p) m += (masses.empty() ? 1.0 : masses[p]) * particles.v[p];
+  return m;
+}
+
+template <int Dim>
+Vec<Dim> face_momentum(const CellGraph<Dim>& graph, const FaceValues& faces) {
+  Vec<Dim> m = Vec<Dim>::Zero();
+  graph.for_each_face([&](FaceId f) { m[graph.face(f).axis] += faces.weight[f] * faces.value[f]; });
+  return m;
+}
+
+template <int Dim>
+Eigen::Vector3d particle_angular_momentum(const RegularLattice<Dim>& lattice, const Particles<Dim>& particles,
+                                          std::span<const double> affine, std::span<const double> masses) {
+  Eigen::Vector3d total = Eigen::Vector3d::Zero();
+  for (int p = 0; p < particles.size(); ++p) {
+    const double m = masses.empty() ? 1.0 : masses[p];
+    const Vec<Dim>& xp = particles.x[p];
+    Eigen::Vector3d l = lift(xp).cross(lift(particles.v[p]));
+    if (!affine.empty())
+      for (int k = 0; k < Dim; ++k) {
+        const LinearStencil<Dim> st(lattice, k, xp);
+        Eigen::Matrix<double, Dim, Dim> d = Eigen::Matrix<double, Dim, Dim>::Zero();
+        for (int corner = 0; corner < (1 << Dim); ++corner) {
+          IVec<Dim> a = st.base;
+          for (int j = 0; j < Dim; ++j) a[j] += (corner >> j) & 1;
+          const Vec<Dim> r = lattice.face_position(k, a) - xp;
+          d += st.weight(corner) * r * r.transpose();
+        }
+        const Vec<Dim> c = Eigen::Map<const Vec<Dim>>(affine.data() + (p * Dim + k) * Dim);
+        l += lift(Vec<Dim>(d * c)).cross(axis_vector<Dim>(k));
+      }
+    total += m * l;
+  }
+  return total;
+}
+
+template <int Dim>
+Eigen::Vector3d face_angular_momentum(const CellGraph<Dim>& graph, const FaceValues& faces) {
+  Eigen::Vector3d total = Eigen::Vector3d::Zero();
+  graph.for_each_face([&](FaceId f) {
+    const int k = graph.face(f).axis;
+    total += faces.weight[f] * faces.value[f] * lift(graph.face_centre(f)).cross(axis_vector<Dim>(k));
+  });
+  return total;
+}
+
+#define LIQUID_REGULAR(D)                                                                                  \
+  template class RegularLattice<D>;                                                                        \
+  template struct LinearStencil<D>;                                                                        \
+  template TransferReport linear_to_faces<D>(const CellGraph<D>&, const RegularLattice<D>&,                \
+                                             const Particles<D>&, const CellBins&, RegularScheme,          \
+                                             std::span<const double>, FaceValues&);                        \
+  template TransferReport linear_to_points<D>(const RegularLattice<D>&, std::span<const double>,           \
+                                              std::span<const Vec<D>>, std::span<Vec<D>>,                  \
+                                              std::span<double>);                                          \
+  template Vec<D> particle_momentum<D>(const Particles<D>&, std::span<const double>);                      \
+  template Vec<D> face_momentum<D>(const CellGraph<D>&, const FaceValues&);                                \
+  template Eigen::Vector3d particle_angular_momentum<D>(const RegularLattice<D>&, const Particles<D>&,     \
+                                                        std::span<const double>, std::span<const double>); \
+  template Eigen::Vector3d face_angular_momentum<D>(const CellGraph<D>&, const FaceValues&);
+LIQUID_REGULAR(2)
+LIQUID_REGULAR(3)
+#undef LIQUID_REGULAR
+
+}  // namespace liquid

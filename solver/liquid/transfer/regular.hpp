@@ -1,0 +1,110 @@
+#pragma once
+// The regular baselines the paper compares against (its Kim 2016 solvers, and Jet's): PIC, FLIP and
+// APIC on a uniform tree (every cell at one level, level jump 0), with multilinear weights on the
+// staggered (MAC) faces.
+//
+// Weights. Component k lives on the axis-k faces, a lattice offset by half a cell along the other
+// axes. A point's weights are the tensor product of 1D hat functions over the 2^Dim lattice faces
+// around it; near a wall, where the lattice ends, the coordinate is clamped onto the last lattice
+// line (constant extrapolation) and the weight's derivative along it is 0.
+// APIC (Jiang et al. 2015) with these linear B-spline weights: each particle carries an affine
+// matrix C (row k: the gradient of component k), the field "apic" of Dim*Dim doubles. Particle ->
+// face adds C_k . (x_f - x_p) to the particle's component; face -> particle sets
+// C_k = sum_f u_f grad w_f(x_p), which equals sum_f w_f u_f D_k^-1 (x_f - x_p) for multilinear
+// weights (D_k the per-component inertia tensor; Jiang et al., Sec. 5.3). With unit masses (or the
+// field "mass"), both transfers conserve linear momentum, and angular momentum measured as
+// sum_p m_p (x_p x v_p + sum_k (D_k c_k) x e_k), exactly (up to round-off) wherever the stencils
+// are whole (particles at least a cell away from walls).
+//
+// Particle -> face is a gather (every face reads the particles of the 2 x 3^(Dim-1) cells its hat
+// covers), so no atomics and the same sums on any thread count.
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "liquid/particles/bins.hpp"
+#include "liquid/particles/particles.hpp"
+#include "liquid/transfer/face_values.hpp"
+#include "liquid/tree/cell_graph.hpp"
+
+namespace liquid {
+
+/// The cells and faces of a uniform tree as lattices.
+template <int Dim>
+class RegularLattice {
+ public:
+  /// Throws naming a cell unless every cell of `graph` is at one level >= 1.
+  explicit RegularLattice(const CellGraph<Dim>& graph);
+
+  int level() const { return level_; }
+  long n() const { return n_; }  ///< cells per axis
+  const Vec<Dim>& h() const { return h_; }
+  const Vec<Dim>& origin() const { return lo_; }
+  /// The cell at lattice address a (0 <= a < n), or no_cell outside.
+  CellId cell(const IVec<Dim>& a) const;
+  /// The axis-k face at lattice address a (0 <= a_k <= n, 0 <= a_j < n), or no_face outside.
+  FaceId face(int k, const IVec<Dim>& a) const;
+  /// Number of axis-k lattice positions along axis j.
+  long extent(int k, int j) const { return j == k ? n_ + 1 : n_; }
+  Vec<Dim> face_position(int k, const IVec<Dim>& a) const;
+
+ private:
+  long flat_cell(const IVec<Dim>& a) const;
+  long flat_face(int k, const IVec<Dim>& a) const;
+  int level_ = 0;
+  long n_ = 0;
+  Vec<Dim> h_, lo_;
+  std::vector<CellId> cells_;
+  std::array<std::vector<FaceId>, Dim> faces_;
+};
+
+/// The multilinear stencil of a point for component k: base lattice address and fractions.
+template <int Dim>
+struct LinearStencil {
+  IVec<Dim> base;
+  Vec<Dim> t;                       ///< fraction in [0, 1] along each axis
+  std::array<bool, Dim> clamped{};  ///< the coordinate left the lattice (derivative 0 along it)
+
+  LinearStencil(const RegularLattice<Dim>& lattice, int k, const Vec<Dim>& x);
+  /// Weight of corner `corner` (bit j: +1 along axis j) and its gradient.
+  double weight(int corner) const;
+  Vec<Dim> gradient(int corner, const Vec<Dim>& h) const;
+};
+
+enum class RegularScheme { pic, apic };
+
+/// Particle -> face on a uniform tree. `masses` may be empty (unit masses). APIC reads the field
+/// "apic" (Dim*Dim doubles per particle). `out` is reset to graph.face_capacity(); a face no
+/// particle weighs on is unknown.
+template <int Dim>
+TransferReport linear_to_faces(const CellGraph<Dim>& graph, const RegularLattice<Dim>& lattice,
+                               const Particles<Dim>& particles, const CellBins& bins, RegularScheme scheme,
+                               std::span<const double> masses, FaceValues& out);
+
+/// Face -> point on a uniform tree: v (out) at every x. With `affine` non-empty (Dim*Dim doubles per
+/// point) APIC's matrix C is written there too.
+template <int Dim>
+TransferReport linear_to_points(const RegularLattice<Dim>& lattice, std::span<const double> u,
+                                std::span<const Vec<Dim>> x, std::span<Vec<Dim>> v,
+                                std::span<double> affine = {});
+
+/// sum_p m_p v_p (masses empty: unit masses).
+template <int Dim>
+Vec<Dim> particle_momentum(const Particles<Dim>& particles, std::span<const double> masses = {});
+/// sum over faces of weight_f u_f e_axis.
+template <int Dim>
+Vec<Dim> face_momentum(const CellGraph<Dim>& graph, const FaceValues& faces);
+/// APIC's particle angular momentum about the origin (z only in 2D): sum_p m_p (x_p x v_p +
+/// sum_k (D_k c_k) x e_k), D_k from the particle's multilinear stencil; `affine` may be empty (C = 0).
+template <int Dim>
+Eigen::Vector3d particle_angular_momentum(const RegularLattice<Dim>& lattice, const Particles<Dim>& particles,
+                                          std::span<const double> affine,
+                                          std::span<const double> masses = {});
+/// sum over faces of weight_f x_f x (u_f e_axis).
+template <int Dim>
+Eigen::Vector3d face_angular_momentum(const CellGraph<Dim>& graph, const FaceValues& faces);
+
+}  // namespace liquid

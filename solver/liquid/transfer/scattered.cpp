@@ -1,0 +1,277 @@
+#include "liquid/transfer/scattered.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <fmt/format.h>
+
+#include "liquid/core/error.hpp"
+#include "liquid/core/parallel.hpp"
+#include "liquid/rbf/interpolant.hpp"
+#include "liquid/rbf/weights.hpp"
+#include "liquid/transfer/mls.hpp"
+
+namespace liquid {
+
+const char* to_string(Scheme scheme) {
+  return scheme == Scheme::rbf ? "rbf" : "mls";
+}
+
+std::string TransferOptions::describe() const {
+  if (scheme == Scheme::rbf)
+    return fmt::format("RBF (PHS r^{} + degree {}, {} ring{}{})", exponent, degree, rings,
+                       rings > 1 ? "s" : "", clamp ? ", clamped" : "");
+  return fmt::format("MLS (degree {}, {} ring{}{})", degree, rings, rings > 1 ? "s" : "",
+                     clamp ? ", clamped" : "");
+}
+
+TransferReport& TransferReport::operator+=(const TransferReport& o) {
+  targets += o.targets;
+  empty += o.empty;
+  clamped += o.clamped;
+  degree_reduced += o.degree_reduced;
+  fallback += o.fallback;
+  max_degree_used = std::max(max_degree_used, o.max_degree_used);
+  return *this;
+}
+
+std::string TransferReport::describe() const {
+  const double pct = targets > 0 ? 100.0 * static_cast<double>(clamped) / static_cast<double>(targets) : 0.0;
+  return fmt::format("targets {}, empty {}, clamped {} ({:.1f}%), degree lowered {}, fallback {}", targets,
+                     empty, clamped, pct, degree_reduced, fallback);
+}
+
+namespace {
+
+void check_options(const TransferOptions& o) {
+  LIQUID_VERIFY(o.degree >= 0 && o.degree <= 4, "transfer: polynomial degree {} is outside [0, 4]", o.degree);
+  LIQUID_VERIFY(o.rings >= 1 && o.rings <= 4, "transfer: {} rings is outside [1, 4]", o.rings);
+  LIQUID_VERIFY(o.scheme == Scheme::mls || (o.exponent >= 1 && o.exponent <= 9 && o.exponent % 2 == 1),
+                "transfer: PHS exponent {} must be odd and in [1, 9]", o.exponent);
+}
+
+/// Inverse-distance mean weights (the fallback of a singular stencil).
+template <int Dim>
+void shepard(std::span<const Vec<Dim>> nodes, const Vec<Dim>& at, std::vector<double>& w) {
+  w.assign(nodes.size(), 0.0);
+  double sum = 0.0;
+  for (std::size_t i = 0; i < nodes.size(); ++i) {
+    const double d = (nodes[i] - at).norm();
+    if (d == 0.0) {
+      std::fill(w.begin(), w.end(), 0.0);
+      w[i] = 1.0;
+      return;
+    }
+    w[i] = 1.0 / (d * d);
+    sum += w[i];
+  }
+  for (double& x : w) x /= sum;
+}
+
+/// v clamped to [lo, hi] when asked; counts the clamp.
+double clamp_to(double v, double lo, double hi, bool clamp, TransferReport& r) {
+  if (!clamp) return v;
+  if (v < lo) {
+    ++r.clamped;
+    return lo;
+  }
+  if (v > hi) {
+    ++r.clamped;
+    return hi;
+  }
+  return v;
+}
+
+struct Scratch {
+  std::vector<CellId> cells, ring;
+  std::vector<std::int32_t> ids;
+  std::vector<double> values, w;
+  TransferReport report;
+};
+
+/// The stencil cells of a face: its cells and those within rings - 1 hops of them, sorted.
+template <int Dim>
+void face_cells(const CellGraph<Dim>& graph, FaceId f, int rings, Scratch& s) {
+  s.cells.clear();
+  for (CellId c : graph.face(f).cell) {
+    if (c == no_cell) continue;
+    graph.k_ring(c, rings - 1, s.ring);
+    s.cells.insert(s.cells.end(), s.ring.begin(), s.ring.end());
+  }
+  std::sort(s.cells.begin(), s.cells.end());
+  s.cells.erase(std::unique(s.cells.begin(), s.cells.end()), s.cells.end());
+}
+
+}  // namespace
+
+template <int Dim>
+TransferReport particles_to_faces(const CellGraph<Dim>& graph, const Particles<Dim>& particles,
+                                  const CellBins& bins, const TransferOptions& options, FaceValues& out) {
+  check_options(options);
+  LIQUID_VERIFY(bins.n_particles() == particles.size(),
+                "particles_to_faces: bins hold {} particles, there are {}", bins.n_particles(),
+                particles.size());
+  out.reset(graph.face_capacity());
+  const rbf::Config config{options.exponent, options.degree};
+  TransferReport total;
+  parallel_for(
+      graph.face_capacity(), [] { return Scratch{}; },
+      [&](Scratch& s, long fl) {
+        const FaceId f = static_cast<FaceId>(fl);
+        if (!graph.face_alive(f)) return;
+        const int axis = graph.face(f).axis;
+        face_cells(graph, f, options.rings, s);
+        std::vector<Vec<Dim>> nodes;
+        s.values.clear();
+        for (CellId c : s.cells)
+          for (std::int32_t p : bins.of(c)) {
+            nodes.push_back(particles.x[p]);
+            s.values.push_back(particles.v[p][axis]);
+          }
+        ++s.report.targets;
+        if (nodes.empty()) {
+          ++s.report.empty;
+          return;
+        }
+        const Vec<Dim> at = graph.face_centre(f);
+        int used = 0;
+        if (options.scheme == Scheme::rbf) {
+          const rbf::Status st = rbf::weights<Dim>(nodes, at, rbf::Operator<Dim>::identity(), config, s.w);
+          if (!st.usable()) {
+            shepard<Dim>(nodes, at, s.w);
+            ++s.report.fallback;
+            used = 0;
+          } else {
+            used = st.degree_used;
+          }
+        } else {
+          used = transfer::mls_weights<Dim>(nodes, at, options.degree, s.w);
+        }
+        if (used < options.degree) ++s.report.degree_reduced;
+        s.report.max_degree_used = std::max(s.report.max_degree_used, used);
+        double value = 0.0, lo = std::numeric_limits<double>::infinity(), hi = -lo;
+        for (std::size_t i = 0; i < nodes.size(); ++i) {
+          value += s.w[i] * s.values[i];
+          lo = std::min(lo, s.values[i]);
+          hi = std::max(hi, s.values[i]);
+        }
+        LIQUID_VERIFY(std::isfinite(value),
+                      "particles_to_faces: non-finite value at face {} (axis {}, centre ({}))", f, axis,
+                      fmt::join(at.data(), at.data() + Dim, ", "));
+        out.value[f] = clamp_to(value, lo, hi, options.clamp, s.report);
+        out.known[f] = 1;
+        out.weight[f] = static_cast<double>(nodes.size());
+      },
+      [&](Scratch& s) { total += s.report; }, 256);
+  return total;
+}
+
+template <int Dim>
+TransferReport faces_to_points(const CellGraph<Dim>& graph, std::span<const double> u,
+                               std::span<const std::uint8_t> known, std::span<const Vec<Dim>> x,
+                               const CellBins& bins, const TransferOptions& options, std::span<Vec<Dim>> v) {
+  check_options(options);
+  LIQUID_VERIFY(static_cast<int>(u.size()) >= graph.face_capacity(),
+                "faces_to_points: {} face values for a graph of {} face ids", u.size(),
+                graph.face_capacity());
+  LIQUID_VERIFY(known.empty() || known.size() == u.size(), "faces_to_points: {} known flags for {} faces",
+                known.size(), u.size());
+  LIQUID_VERIFY(bins.n_particles() == static_cast<int>(x.size()) && v.size() == x.size(),
+                "faces_to_points: {} points, {} binned, {} outputs", x.size(), bins.n_particles(), v.size());
+  const rbf::Config config{options.exponent, options.degree};
+  // The cells that hold points, in id order.
+  std::vector<CellId> cells;
+  for (CellId c = 0; c + 1 < static_cast<CellId>(bins.begin.size()); ++c)
+    if (bins.begin[c + 1] > bins.begin[c]) cells.push_back(c);
+  TransferReport total;
+  parallel_for(
+      static_cast<long>(cells.size()), [] { return Scratch{}; },
+      [&](Scratch& s, long ci) {
+        const CellId c = cells[ci];
+        graph.k_ring(c, options.rings, s.ring);
+        const auto pts = bins.of(c);
+        std::vector<FaceId> faces;
+        for (CellId r : s.ring)
+          for (FaceId f : graph.faces(r))
+            if (known.empty() || known[f]) faces.push_back(f);
+        std::sort(faces.begin(), faces.end());
+        faces.erase(std::unique(faces.begin(), faces.end()), faces.end());
+        std::vector<Vec<Dim>> nodes;
+        for (int axis = 0; axis < Dim; ++axis) {
+          nodes.clear();
+          s.values.clear();
+          for (FaceId f : faces)
+            if (graph.face(f).axis == axis) {
+              nodes.push_back(graph.face_centre(f));
+              s.values.push_back(u[f]);
+            }
+          s.report.targets += static_cast<long>(pts.size());
+          if (nodes.empty()) {
+            s.report.empty += static_cast<long>(pts.size());
+            for (std::int32_t p : pts) v[p][axis] = 0.0;
+            continue;
+          }
+          const double lo = *std::min_element(s.values.begin(), s.values.end());
+          const double hi = *std::max_element(s.values.begin(), s.values.end());
+          auto put = [&](std::int32_t p, double value) {
+            LIQUID_VERIFY(std::isfinite(value), "faces_to_points: non-finite value at point {} in cell {}", p,
+                          c);
+            v[p][axis] = clamp_to(value, lo, hi, options.clamp, s.report);
+          };
+          if (options.scheme == Scheme::rbf) {
+            rbf::Interpolant<Dim> interp(nodes, config);
+            if (interp.status().usable()) {
+              if (interp.status().degree_used < options.degree) ++s.report.degree_reduced;
+              s.report.max_degree_used = std::max(s.report.max_degree_used, interp.status().degree_used);
+              interp.fit(
+                  Eigen::Map<const Eigen::VectorXd>(s.values.data(), static_cast<long>(s.values.size())));
+              for (std::int32_t p : pts) put(p, interp.value_at(x[p]));
+              continue;
+            }
+            ++s.report.fallback;
+            for (std::int32_t p : pts) {
+              shepard<Dim>(nodes, x[p], s.w);
+              double value = 0.0;
+              for (std::size_t i = 0; i < nodes.size(); ++i) value += s.w[i] * s.values[i];
+              put(p, value);
+            }
+            continue;
+          }
+          for (std::int32_t p : pts) {
+            const int used = transfer::mls_weights<Dim>(nodes, x[p], options.degree, s.w);
+            if (used < options.degree) ++s.report.degree_reduced;
+            s.report.max_degree_used = std::max(s.report.max_degree_used, used);
+            double value = 0.0;
+            for (std::size_t i = 0; i < nodes.size(); ++i) value += s.w[i] * s.values[i];
+            put(p, value);
+          }
+        }
+      },
+      [&](Scratch& s) { total += s.report; }, 16);
+  return total;
+}
+
+template <int Dim>
+void flip_blend(std::span<const Vec<Dim>> pic, std::span<const Vec<Dim>> delta, double alpha,
+                std::span<Vec<Dim>> v) {
+  LIQUID_VERIFY(alpha >= 0.0 && alpha <= 1.0, "FLIP blend {} is outside [0, 1]", alpha);
+  LIQUID_VERIFY(pic.size() == v.size() && delta.size() == v.size(), "flip_blend: {} / {} / {} particles",
+                pic.size(), delta.size(), v.size());
+  parallel_for(
+      static_cast<long>(v.size()), [&](long i) { v[i] = alpha * (v[i] + delta[i]) + (1.0 - alpha) * pic[i]; },
+      4096);
+}
+
+#define LIQUID_SCATTERED(D)                                                                                \
+  template TransferReport particles_to_faces<D>(const CellGraph<D>&, const Particles<D>&, const CellBins&, \
+                                                const TransferOptions&, FaceValues&);                      \
+  template TransferReport faces_to_points<D>(const CellGraph<D>&, std::span<const double>,                 \
+                                             std::span<const std::uint8_t>, std::span<const Vec<D>>,       \
+                                             const CellBins&, const TransferOptions&, std::span<Vec<D>>);  \
+  template void flip_blend<D>(std::span<const Vec<D>>, std::span<const Vec<D>>, double, std::span<Vec<D>>);
+LIQUID_SCATTERED(2)
+LIQUID_SCATTERED(3)
+#undef LIQUID_SCATTERED
+
+}  // namespace liquid

@@ -1,0 +1,71 @@
+#pragma once
+// Particle <-> face transfers on any Cellgraph (non-graded trees included), by RBF (the paper's,
+// Sec. 4.5) or by moving least squares (HOPIC's, for comparison).
+//
+// Particle -> face: a face's normal component is interpolated to its centre from the same component
+// of the particles in the face's adjacent cells (rings = 1; rings = r adds the cells within r - 1
+// face hops of them). A gather: each face reads its particles, so no atomics and the same sums on
+// any thread count.
+// Face -> particle: component k at a particle is interpolated from the axis-k faces of the cells
+// within `rings` face hops of the particle's cell (rings = 1: the cell and the cells incident to it).
+// The RBF interpolant is factorised once per (cell, axis) and evaluated at every particle of the
+// cell; MLS solves one small least-squares problem per particle.
+//
+// Hard stencils are normal input. Too few or degenerate nodes lower the polynomial degree (counted).
+// Coincident nodes make the RBF system singular: the inverse-distance mean is used instead
+// (counted). No source in reach leaves the target unknown (faces) or at 0 (particles), counted,
+// never NaN. Clamping (on by default) keeps each value within the range of its sources, against
+// the overshoot of scattered interpolants near walls (paper Sec. 7), and is counted.
+
+#include <cstdint>
+#include <span>
+#include <string>
+
+#include "liquid/particles/bins.hpp"
+#include "liquid/particles/particles.hpp"
+#include "liquid/transfer/face_values.hpp"
+#include "liquid/tree/cell_graph.hpp"
+
+namespace liquid {
+
+enum class Scheme { rbf, mls };
+const char* to_string(Scheme scheme);
+
+struct TransferOptions {
+  Scheme scheme = Scheme::rbf;
+  int exponent = 5;   ///< PHS exponent r^s (RBF only; odd, 1..9)
+  int degree = 2;     ///< polynomial degree: appended to the RBF, or fitted by MLS (0..4)
+  int rings = 1;      ///< stencil reach in face hops (see above)
+  bool clamp = true;  ///< clamp every value to the range of its sources
+
+  /// The paper's transfer: PHS r^5 with polynomials of degree 2, the adjacent/incident cells.
+  static TransferOptions paper_rbf() { return {}; }
+  /// HOPIC's cubic MLS; it needs more nodes than the RBF (10 terms in 2D, 20 in 3D), so 2 rings.
+  static TransferOptions cubic_mls() { return {Scheme::mls, 5, 3, 2, true}; }
+  /// A linear least-squares fit on the RBF's stencil: the "linear interpolation" of scattered data.
+  static TransferOptions linear_fit() { return {Scheme::mls, 5, 1, 1, true}; }
+  std::string describe() const;
+};
+
+/// Particle -> face for every alive face; `out` is reset to graph.face_capacity() first. Uses
+/// OpenMP. `bins` must be current for `particles`.
+template <int Dim>
+TransferReport particles_to_faces(const CellGraph<Dim>& graph, const Particles<Dim>& particles,
+                                  const CellBins& bins, const TransferOptions& options, FaceValues& out);
+
+/// Face -> point: the velocity at every point x[i] (points binned in `bins`; particles or any
+/// sample points) from the face values `u` (indexed by face id). Faces with known[f] == 0 are not
+/// used (pass an empty span when every face is known). `v` (out) has one entry per point. OpenMP.
+template <int Dim>
+TransferReport faces_to_points(const CellGraph<Dim>& graph, std::span<const double> u,
+                               std::span<const std::uint8_t> known, std::span<const Vec<Dim>> x,
+                               const CellBins& bins, const TransferOptions& options, std::span<Vec<Dim>> v);
+
+/// FLIP's update blended with PIC: v = alpha (v_old + delta) + (1 - alpha) pic, where pic is the
+/// new grid velocity at the particle and delta the change of the grid velocity there (the same
+/// transfer applied to u_new - u_old). alpha = 0 is PIC, 1 is pure FLIP.
+template <int Dim>
+void flip_blend(std::span<const Vec<Dim>> pic, std::span<const Vec<Dim>> delta, double alpha,
+                std::span<Vec<Dim>> v);
+
+}  // namespace liquid

@@ -1,0 +1,290 @@
+// Particles: Halton seeding (the sequence itself, reproducible, inside the region, thread-count
+// independent), binning against brute-force point location on random non-graded trees (from
+// scratch, after moves, after adapts), compaction, reseeding ranges, and advection (RK2/RK3 orders,
+// walls and solids).
+#include <gtest/gtest.h>
+#include <omp.h>
+
+#include <cmath>
+#include <numbers>
+#include <random>
+
+#include "liquid/core/error.hpp"
+#include "liquid/particles/advect.hpp"
+#include "liquid/particles/bins.hpp"
+#include "liquid/particles/seeding.hpp"
+#include "liquid/tree/builders.hpp"
+
+namespace liquid {
+namespace {
+
+template <typename T>
+class ParticlesTest : public ::testing::Test {};
+using Dims = ::testing::Types<std::integral_constant<int, 2>, std::integral_constant<int, 3>>;
+TYPED_TEST_SUITE(ParticlesTest, Dims);
+
+/// The radical inverse of i in base b: the Halton coordinate by its definition.
+double radical_inverse(int i, int b) {
+  double f = 1.0, r = 0.0;
+  for (; i > 0; i /= b) {
+    f /= b;
+    r += f * (i % b);
+  }
+  return r;
+}
+
+template <int Dim>
+CellGraph<Dim> random_tree(std::uint64_t seed, int jump = 2) {
+  CellGraphOptions<Dim> options;
+  options.max_jump = jump;
+  return tree::random<Dim>(Box<Dim>{Vec<Dim>::Constant(-1.0), Vec<Dim>::Constant(1.0)}, seed,
+                           Dim == 2 ? 3 : 2, Dim == 2 ? 7 : 5, 0.35, options);
+}
+
+template <int Dim>
+std::vector<Vec<Dim>> random_points(int n, std::uint64_t seed, double lo = -1.0, double hi = 1.0) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(lo, hi);
+  std::vector<Vec<Dim>> x(n);
+  for (auto& p : x)
+    for (int k = 0; k < Dim; ++k) p[k] = u(rng);
+  return x;
+}
+
+template <int Dim>
+void expect_bins_match_location(const CellGraph<Dim>& g, std::span<const Vec<Dim>> x, const CellBins& bins) {
+  ASSERT_EQ(bins.n_particles(), static_cast<int>(x.size()));
+  long listed = 0;
+  for (std::size_t i = 0; i < x.size(); ++i) ASSERT_EQ(bins.cell[i], g.locate(x[i])) << "particle " << i;
+  g.for_each_cell([&](CellId c) {
+    const auto ps = bins.of(c);
+    listed += static_cast<long>(ps.size());
+    for (std::size_t k = 0; k < ps.size(); ++k) {
+      EXPECT_EQ(bins.cell[ps[k]], c);
+      if (k > 0) EXPECT_LT(ps[k - 1], ps[k]);
+    }
+  });
+  EXPECT_EQ(listed, static_cast<long>(x.size()));
+}
+
+TEST(Halton, IsTheHaltonSequence) {
+  const auto p2 = halton_points<2>(50);
+  const auto p3 = halton_points<3>(50);
+  for (int i = 0; i < 50; ++i) {
+    EXPECT_NEAR(p2[i][0], radical_inverse(i + 1, 2), 1e-15);
+    EXPECT_NEAR(p2[i][1], radical_inverse(i + 1, 3), 1e-15);
+    EXPECT_NEAR(p3[i][2], radical_inverse(i + 1, 5), 1e-15);
+  }
+}
+
+TYPED_TEST(ParticlesTest, SeedingIsReproducibleInsideTheRegionAndThreadIndependent) {
+  constexpr int Dim = TypeParam::value;
+  const auto g = random_tree<Dim>(3);
+  const auto region =
+      levelset::subtract<Dim>(levelset::sphere<Dim>(Vec<Dim>::Constant(0.1), 0.8),
+                              levelset::box<Dim>({Vec<Dim>::Constant(0.2), Vec<Dim>::Constant(0.6)}));
+  for (double jitter : {0.0, 0.5}) {
+    SeedOptions options;
+    options.jitter = jitter;
+    Particles<Dim> a, b;
+    const int threads = omp_get_max_threads();
+    omp_set_num_threads(1);
+    const long na = seed_region<Dim>(g, region, options, a);
+    omp_set_num_threads(std::max(2, threads));
+    const long nb = seed_region<Dim>(g, region, options, b);
+    omp_set_num_threads(threads);
+    ASSERT_GT(na, 100);
+    ASSERT_EQ(na, nb);
+    for (int i = 0; i < a.size(); ++i) {
+      ASSERT_EQ(a.x[i], b.x[i]);
+      EXPECT_LT(region(a.x[i]), 0.0);
+    }
+    CellBins bins;
+    bin_particles<Dim>(g, a.x, bins);
+    g.for_each_cell([&](CellId c) { EXPECT_LE(bins.count(c), 1 << Dim); });
+    // The same relative pattern in every cell: a cell wholly inside gets all 2^Dim points.
+    const CellId c = g.locate(Vec<Dim>::Constant(-0.1));  // a cell wholly inside the region
+    if (jitter == 0.0 && g.level(c) >= 3) {
+      ASSERT_EQ(bins.count(c), 1 << Dim);
+      const auto pattern = halton_points<Dim>(1 << Dim);
+      const Box<Dim> box = g.box(c);
+      const Vec<Dim> rel = (a.x[bins.of(c)[0]] - box.lo).cwiseQuotient(box.size());
+      EXPECT_NEAR((rel - pattern[0]).norm(), 0.0, 1e-12);
+    }
+  }
+  SeedOptions bad;
+  bad.jitter = 1.5;
+  Particles<Dim> p;
+  EXPECT_THROW(seed_region<Dim>(g, region, bad, p), Error);
+}
+
+TYPED_TEST(ParticlesTest, BinningEqualsPointLocationThroughMovesAndAdapts) {
+  constexpr int Dim = TypeParam::value;
+  for (std::uint64_t seed : {1u, 2u, 3u}) {
+    auto g = random_tree<Dim>(seed, seed == 3 ? unlimited_jump : 2);
+    auto x = random_points<Dim>(5000, seed);
+    CellBins bins;
+    bin_particles<Dim>(g, x, bins);
+    expect_bins_match_location<Dim>(g, x, bins);
+
+    // Small moves: most stay, the rest are found among the neighbours.
+    std::mt19937_64 rng(seed);
+    std::normal_distribution<double> step(0.0, 0.004);
+    for (auto& p : x)
+      for (int k = 0; k < Dim; ++k) p[k] = std::clamp(p[k] + step(rng), -1.0, 1.0);
+    BinStats moved = rebin<Dim>(g, x, bins);
+    expect_bins_match_location<Dim>(g, x, bins);
+    EXPECT_GT(moved.stayed, 4000);
+    EXPECT_LT(moved.located, moved.neighbour + 50);
+
+    // An adapt: splits and merges at random; particles that did not move are remapped, not located.
+    MarkList marks;
+    ASSERT_GT(g.n_cells(), 100);
+    std::bernoulli_distribution coin(0.15);
+    g.for_each_cell([&](CellId c) {
+      if (coin(rng)) (g.level(c) % 2 ? marks.split : marks.merge).push_back(c);
+    });
+    const AdaptReport report = g.adapt(marks);
+    ASSERT_FALSE(report.empty());
+    const BinStats adapted = rebin<Dim>(g, x, bins, &report);
+    expect_bins_match_location<Dim>(g, x, bins);
+    EXPECT_EQ(adapted.located, 0);
+    EXPECT_EQ(adapted.neighbour, 0);
+    EXPECT_GT(adapted.remapped, 0);
+  }
+}
+
+TEST(Particles, FieldsCompactAndRefuseBadUse) {
+  Particles<2> p;
+  p.push_back(Vec<2>(0.1, 0.2), Vec<2>(1, 0));
+  const int f = p.add_field("apic", 4);
+  const int id = p.add_field("id", 1);
+  EXPECT_THROW(p.add_field("apic", 2), Error);
+  EXPECT_THROW(p.field_index("nope"), Error);
+  for (int i = 1; i < 6; ++i) p.push_back(Vec<2>(0.1 * i, 0.0), Vec<2>(i, 0));
+  for (int i = 0; i < p.size(); ++i) {
+    p.field(id)[i] = i;
+    for (int k = 0; k < 4; ++k) p.field(f)[4 * i + k] = 10 * i + k;
+  }
+  std::vector<std::uint8_t> remove{1, 0, 0, 1, 0, 1};
+  std::vector<std::int32_t> to;
+  EXPECT_EQ(p.compact(remove, &to), 3);
+  ASSERT_EQ(p.size(), 3);
+  EXPECT_EQ(to, (std::vector<std::int32_t>{-1, 0, 1, -1, 2, -1}));
+  const int kept[3] = {1, 2, 4};
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_EQ(p.field(id)[i], kept[i]);
+    EXPECT_EQ(p.field(f)[4 * i + 3], 10 * kept[i] + 3);
+    EXPECT_EQ(p.v[i][0], kept[i]);
+  }
+  EXPECT_THROW(p.compact(std::vector<std::uint8_t>(2, 0)), Error);
+}
+
+TYPED_TEST(ParticlesTest, ReseedingBringsEveryFluidCellIntoRange) {
+  constexpr int Dim = TypeParam::value;
+  const auto g = random_tree<Dim>(5);
+  // 0 to 24 particles per cell, at random.
+  Particles<Dim> p;
+  std::mt19937_64 rng(11);
+  std::uniform_int_distribution<int> count(0, 24);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  g.for_each_cell([&](CellId c) {
+    const Box<Dim> b = g.box(c);
+    const int n = count(rng);
+    for (int i = 0; i < n; ++i) {
+      Vec<Dim> r;
+      for (int k = 0; k < Dim; ++k) r[k] = u(rng);
+      p.push_back(b.lo + r.cwiseProduct(b.size()), Vec<Dim>::Constant(-7.0));
+    }
+  });
+  CellBins bins;
+  bin_particles<Dim>(g, p.x, bins);
+  const int lo = Dim == 2 ? 3 : 5, hi = Dim == 2 ? 12 : 15;
+  long outside = 0, occupied = 0;
+  g.for_each_cell([&](CellId c) {
+    const int n = bins.count(c);
+    occupied += n > 0;
+    outside += n > 0 && (n < lo || n > hi);
+  });
+  ASSERT_GT(outside, 10);
+  const auto cells = g.cell_ids();
+  const auto source = [](std::span<const Vec<Dim>> x, std::span<const CellId>, std::span<Vec<Dim>> v) {
+    for (std::size_t i = 0; i < x.size(); ++i) v[i] = 2.0 * x[i];
+  };
+  const long before = p.size();
+  const ReseedReport r = reseed<Dim>(g, cells, ReseedOptions{}, source, p, bins);
+  EXPECT_EQ(r.cells, outside);
+  EXPECT_EQ(r.created, outside * (1 << Dim));
+  EXPECT_EQ(p.size(), before - r.deleted + r.created);
+  expect_bins_match_location<Dim>(g, p.x, bins);
+  long occupied_after = 0;
+  g.for_each_cell([&](CellId c) {
+    const int n = bins.count(c);
+    occupied_after += n > 0;
+    if (n > 0) {
+      EXPECT_GE(n, lo) << "cell " << c;
+      EXPECT_LE(n, hi) << "cell " << c;
+    }
+  });
+  EXPECT_EQ(occupied_after, occupied);  // empty (non-fluid) cells stay empty
+  for (int i = static_cast<int>(before - r.deleted); i < p.size(); ++i) EXPECT_EQ(p.v[i], 2.0 * p.x[i]);
+  EXPECT_EQ(reseed<Dim>(g, cells, ReseedOptions{}, source, p, bins).cells, 0);  // idempotent
+  ReseedOptions bad;
+  bad.lo = 10, bad.hi = 5;
+  EXPECT_THROW(reseed<Dim>(g, cells, bad, source, p, bins), Error);
+}
+
+/// Error of one revolution of a rigid rotation about the origin.
+template <int Dim>
+double rotation_error(Integrator integrator, int steps) {
+  const auto u = [](const Vec<Dim>& x) {
+    Vec<Dim> v = Vec<Dim>::Zero();
+    v[0] = -x[1], v[1] = x[0];
+    return v;
+  };
+  std::vector<Vec<Dim>> x(3, Vec<Dim>::Zero());
+  x[0][0] = 0.5, x[1][1] = -0.3, x[2][0] = 0.2, x[2][1] = 0.4;
+  const auto start = x;
+  const double dt = 2 * std::numbers::pi / steps;
+  const Box<Dim> domain{Vec<Dim>::Constant(-1.0), Vec<Dim>::Constant(1.0)};
+  for (int s = 0; s < steps; ++s) advect<Dim>(x, dt, integrator, u, domain);
+  double e = 0.0;
+  for (std::size_t i = 0; i < x.size(); ++i) e = std::max(e, (x[i] - start[i]).norm());
+  return e;
+}
+
+TYPED_TEST(ParticlesTest, AdvectionConvergesAtTheOrderOfItsIntegrator) {
+  constexpr int Dim = TypeParam::value;
+  const double o2 =
+      std::log2(rotation_error<Dim>(Integrator::rk2, 64) / rotation_error<Dim>(Integrator::rk2, 128));
+  const double o3 =
+      std::log2(rotation_error<Dim>(Integrator::rk3, 64) / rotation_error<Dim>(Integrator::rk3, 128));
+  EXPECT_NEAR(o2, 2.0, 0.2);
+  EXPECT_NEAR(o3, 3.0, 0.2);
+  EXPECT_LT(rotation_error<Dim>(Integrator::rk3, 64), rotation_error<Dim>(Integrator::rk2, 64));
+}
+
+TYPED_TEST(ParticlesTest, AdvectionClampsToTheDomainAndPushesOutOfSolids) {
+  constexpr int Dim = TypeParam::value;
+  const Box<Dim> domain{Vec<Dim>::Zero(), Vec<Dim>::Ones()};
+  const auto solid = levelset::sphere<Dim>(Vec<Dim>::Constant(0.5), 0.2);
+  auto x = random_points<Dim>(400, 7, 0.0, 1.0);
+  std::erase_if(x, [&](const Vec<Dim>& p) { return solid(p) < 0.0; });
+  const auto towards_centre = [](const Vec<Dim>& p) { return Vec<Dim>(Vec<Dim>::Constant(0.5) - p); };
+  const AdvectReport r = advect<Dim>(x, 0.9, Integrator::rk2, towards_centre, domain, solid);
+  EXPECT_GT(r.pushed, 50);
+  EXPECT_EQ(r.stuck, 0);
+  for (const auto& p : x) {
+    EXPECT_GE(solid(p), 0.0);
+    EXPECT_TRUE(domain.contains(p));
+  }
+  const auto outwards = [](const Vec<Dim>& p) { return Vec<Dim>(10.0 * (p - Vec<Dim>::Constant(0.5))); };
+  const AdvectReport w = advect<Dim>(x, 1.0, Integrator::rk3, outwards, domain);
+  EXPECT_EQ(w.clamped, static_cast<long>(x.size()));
+  for (const auto& p : x) EXPECT_TRUE(domain.contains(p));
+  const auto nan = [](const Vec<Dim>&) { return Vec<Dim>::Constant(std::nan("")); };
+  EXPECT_THROW(advect<Dim>(x, 0.1, Integrator::rk2, nan, domain), Error);
+}
+
+}  // namespace
+}  // namespace liquid

@@ -1,0 +1,309 @@
+// Particle <-> face transfers: the RBF transfer reproduces linear fields on any non-graded tree;
+// MLS weights reproduce their polynomial degree; APIC conserves linear and angular momentum
+// (particle -> face -> particle) on a uniform tree; faces no particle reaches are reported and
+// extrapolated, never NaN; clamping acts and is counted; every transfer gives the same bits on 1
+// and on several threads.
+#include <gtest/gtest.h>
+#include <omp.h>
+
+#include <cmath>
+#include <random>
+
+#include "liquid/core/error.hpp"
+#include "liquid/particles/seeding.hpp"
+#include "liquid/transfer/extrapolate.hpp"
+#include "liquid/transfer/mls.hpp"
+#include "liquid/transfer/regular.hpp"
+#include "liquid/transfer/scattered.hpp"
+#include "liquid/tree/builders.hpp"
+
+namespace liquid {
+namespace {
+
+template <typename T>
+class TransferTest : public ::testing::Test {};
+using Dims = ::testing::Types<std::integral_constant<int, 2>, std::integral_constant<int, 3>>;
+TYPED_TEST_SUITE(TransferTest, Dims);
+
+template <int Dim>
+Vec<Dim> linear_field(const Vec<Dim>& x) {
+  Vec<Dim> v;
+  for (int k = 0; k < Dim; ++k) {
+    v[k] = 0.3 - 0.7 * k;
+    for (int j = 0; j < Dim; ++j) v[k] += (1.0 + k - 0.5 * j) * x[j];
+  }
+  return v;
+}
+
+template <int Dim>
+CellGraph<Dim> random_tree(std::uint64_t seed, int jump) {
+  CellGraphOptions<Dim> options;
+  options.max_jump = jump;
+  return tree::random<Dim>(Box<Dim>{Vec<Dim>::Constant(-1.0), Vec<Dim>::Constant(1.0)}, seed, 2,
+                           Dim == 2 ? 6 : 4, 0.35, options);
+}
+
+template <int Dim>
+Particles<Dim> seeded(const CellGraph<Dim>& g, double jitter, const levelset::Function<Dim>& region = {}) {
+  Particles<Dim> p;
+  SeedOptions o;
+  o.jitter = jitter;
+  const auto everywhere = [](const Vec<Dim>&) { return -1.0; };
+  seed_region<Dim>(g, region ? region : levelset::Function<Dim>(everywhere), o, p);
+  return p;
+}
+
+TYPED_TEST(TransferTest, RbfReproducesLinearFieldsOnNonGradedTrees) {
+  constexpr int Dim = TypeParam::value;
+  for (int jump : {1, 2, 3}) {
+    const auto g = random_tree<Dim>(20 + jump, jump);
+    auto p = seeded<Dim>(g, 0.6);
+    for (int i = 0; i < p.size(); ++i) p.v[i] = linear_field<Dim>(p.x[i]);
+    CellBins bins;
+    bin_particles<Dim>(g, p.x, bins);
+    TransferOptions o = TransferOptions::paper_rbf();
+    o.clamp = false;
+    FaceValues faces;
+    const TransferReport r = particles_to_faces<Dim>(g, p, bins, o, faces);
+    EXPECT_EQ(r.empty, 0);
+    EXPECT_EQ(r.fallback, 0);
+    double worst = 0.0;
+    g.for_each_face([&](FaceId f) {
+      ASSERT_TRUE(faces.known[f]);
+      worst = std::max(worst, std::abs(faces.value[f] - linear_field<Dim>(g.face_centre(f))[g.face(f).axis]));
+    });
+    EXPECT_LT(worst, 1e-10) << "particle -> face, jump " << jump;
+
+    std::vector<double> u(g.face_capacity(), 0.0);
+    g.for_each_face([&](FaceId f) { u[f] = linear_field<Dim>(g.face_centre(f))[g.face(f).axis]; });
+    std::vector<Vec<Dim>> v(p.size());
+    const TransferReport back = faces_to_points<Dim>(g, u, {}, p.x, bins, o, v);
+    EXPECT_EQ(back.empty, 0);
+    double worst_back = 0.0;
+    for (int i = 0; i < p.size(); ++i)
+      worst_back = std::max(worst_back, (v[i] - linear_field<Dim>(p.x[i])).norm());
+    EXPECT_LT(worst_back, 1e-10) << "face -> particle, jump " << jump;
+  }
+}
+
+TYPED_TEST(TransferTest, MlsWeightsReproduceTheirDegreeAndLowerItWhenShort) {
+  constexpr int Dim = TypeParam::value;
+  std::mt19937_64 rng(4);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const auto cubic = [](const Vec<Dim>& x) {
+    double v = 1.0 + x[0] - 2 * x[1] * x[1] * x[0] + 0.5 * x[1] * x[1] * x[1];
+    if constexpr (Dim == 3) v += x[2] * x[0] * x[1] - x[2] * x[2] * x[2];
+    return v;
+  };
+  std::vector<Vec<Dim>> nodes(60);
+  for (auto& x : nodes)
+    for (int k = 0; k < Dim; ++k) x[k] = u(rng);
+  const Vec<Dim> at = Vec<Dim>::Constant(0.1);
+  std::vector<double> w;
+  ASSERT_EQ(transfer::mls_weights<Dim>(nodes, at, 3, w), 3);
+  double value = 0.0;
+  for (std::size_t i = 0; i < nodes.size(); ++i) value += w[i] * cubic(nodes[i]);
+  EXPECT_NEAR(value, cubic(at), 1e-10);
+  // Three nodes carry a linear fit in 2D, not a quadratic; collinear nodes only a line's.
+  std::vector<Vec<Dim>> few(nodes.begin(), nodes.begin() + Dim + 1);
+  EXPECT_EQ(transfer::mls_weights<Dim>(few, at, 3, w), 1);
+  std::vector<Vec<Dim>> line(8, Vec<Dim>::Zero());
+  for (int i = 0; i < 8; ++i) line[i][0] = 0.1 * i;
+  EXPECT_EQ(transfer::mls_weights<Dim>(line, at, 2, w), 0);
+  EXPECT_EQ(transfer::mls_weights<Dim>({}, at, 2, w), -1);
+}
+
+TYPED_TEST(TransferTest, ApicConservesLinearAndAngularMomentum) {
+  constexpr int Dim = TypeParam::value;
+  const auto g = tree::uniform<Dim>(Box<Dim>{}, Dim == 2 ? 5 : 3);
+  const RegularLattice<Dim> lattice(g);
+  const double h = lattice.h()[0];
+  Particles<Dim> p;
+  const int apic = p.add_field("apic", Dim * Dim);
+  std::mt19937_64 rng(8);
+  std::uniform_real_distribution<double> pos(1.5 * h, 1.0 - 1.5 * h), vel(-1.0, 1.0);
+  for (int i = 0; i < 2000; ++i) {
+    Vec<Dim> x, v;
+    for (int k = 0; k < Dim; ++k) x[k] = pos(rng), v[k] = vel(rng);
+    p.push_back(x, v);
+  }
+  for (double& c : p.field(apic)) c = 3.0 * vel(rng);
+  CellBins bins;
+  bin_particles<Dim>(g, p.x, bins);
+  std::vector<double> masses(p.size());
+  for (double& m : masses) m = 0.5 + 0.5 * std::abs(vel(rng));
+
+  const Vec<Dim> p0 = particle_momentum<Dim>(p, masses);
+  const Eigen::Vector3d l0 = particle_angular_momentum<Dim>(lattice, p, p.field(apic), masses);
+  FaceValues faces;
+  linear_to_faces<Dim>(g, lattice, p, bins, RegularScheme::apic, masses, faces);
+  const Vec<Dim> p1 = face_momentum<Dim>(g, faces);
+  const Eigen::Vector3d l1 = face_angular_momentum<Dim>(g, faces);
+  EXPECT_LT((p1 - p0).norm(), 1e-11 * p0.norm() + 1e-11);
+  EXPECT_LT((l1 - l0).norm(), 1e-11 * l0.norm() + 1e-11);
+
+  linear_to_points<Dim>(lattice, faces.value, p.x, p.v, p.field(apic));
+  const Vec<Dim> p2 = particle_momentum<Dim>(p, masses);
+  const Eigen::Vector3d l2 = particle_angular_momentum<Dim>(lattice, p, p.field(apic), masses);
+  EXPECT_LT((p2 - p0).norm(), 1e-11 * p0.norm() + 1e-11);
+  EXPECT_LT((l2 - l0).norm(), 1e-11 * l0.norm() + 1e-11);
+
+  // PIC (no affine part) keeps linear momentum but not angular momentum.
+  Particles<Dim> q = p;
+  for (double& c : q.field(apic)) c = 0.0;
+  const Eigen::Vector3d lq0 = particle_angular_momentum<Dim>(lattice, q, {}, masses);
+  linear_to_faces<Dim>(g, lattice, q, bins, RegularScheme::pic, masses, faces);
+  linear_to_points<Dim>(lattice, faces.value, q.x, q.v);
+  EXPECT_LT((particle_momentum<Dim>(q, masses) - particle_momentum<Dim>(p, masses)).norm(), 1e-9);
+  EXPECT_GT((particle_angular_momentum<Dim>(lattice, q, {}, masses) - lq0).norm(), 1e-6 * lq0.norm());
+
+  EXPECT_THROW(RegularLattice<Dim>(random_tree<Dim>(1, 2)), Error);
+}
+
+TYPED_TEST(TransferTest, EmptyFacesAreReportedExtrapolatedAndNeverNaN) {
+  constexpr int Dim = TypeParam::value;
+  const auto g = random_tree<Dim>(31, 2);
+  const auto blob = levelset::sphere<Dim>(Vec<Dim>::Constant(-0.3), 0.45);
+  auto p = seeded<Dim>(g, 0.3, blob);
+  for (int i = 0; i < p.size(); ++i) p.v[i] = linear_field<Dim>(p.x[i]);
+  CellBins bins;
+  bin_particles<Dim>(g, p.x, bins);
+  for (const TransferOptions& o : {TransferOptions::paper_rbf(), TransferOptions::cubic_mls()}) {
+    FaceValues faces;
+    const TransferReport r = particles_to_faces<Dim>(g, p, bins, o, faces);
+    long unknown = 0;
+    g.for_each_face([&](FaceId f) {
+      ASSERT_TRUE(std::isfinite(faces.value[f]));
+      unknown += !faces.known[f];
+    });
+    EXPECT_GT(r.empty, 0);
+    EXPECT_EQ(r.empty, unknown);
+    // Points in cells with no known face nearby are left at zero and counted.
+    std::vector<Vec<Dim>> far{Vec<Dim>::Constant(0.97)};
+    CellBins far_bins;
+    bin_particles<Dim>(g, far, far_bins);
+    std::vector<Vec<Dim>> v(1, Vec<Dim>::Constant(5.0));
+    const TransferReport back = faces_to_points<Dim>(g, faces.value, faces.known, far, far_bins, o, v);
+    EXPECT_EQ(back.empty, Dim);
+    EXPECT_EQ(v[0], Vec<Dim>::Zero());
+    double lo = 1e300, hi = -1e300;
+    g.for_each_face([&](FaceId f) {
+      if (faces.known[f]) lo = std::min(lo, faces.value[f]), hi = std::max(hi, faces.value[f]);
+    });
+    // One layer fills the faces next to the blob; enough layers fill the whole (connected) graph.
+    const ExtrapolationReport e1 = extrapolate_faces<Dim>(g, 1, faces.value, faces.known);
+    ASSERT_EQ(e1.filled.size(), 1u);
+    EXPECT_GT(e1.filled[0], 0);
+    EXPECT_GT(e1.left_unknown, 0);
+    EXPECT_EQ(e1.filled[0] + e1.left_unknown, unknown);
+    const ExtrapolationReport all = extrapolate_faces<Dim>(g, 1000, faces.value, faces.known);
+    EXPECT_EQ(all.left_unknown, 0);
+    g.for_each_face([&](FaceId f) {
+      ASSERT_TRUE(std::isfinite(faces.value[f]));
+      // Means of known neighbours: a maximum principle.
+      EXPECT_GE(faces.value[f], lo);
+      EXPECT_LE(faces.value[f], hi);
+    });
+  }
+}
+
+TYPED_TEST(TransferTest, ClampingKeepsValuesInTheRangeOfTheirSources) {
+  constexpr int Dim = TypeParam::value;
+  const auto g = random_tree<Dim>(41, 2);
+  auto p = seeded<Dim>(g, 0.6);
+  // A jump: RBF and MLS overshoot next to it.
+  for (int i = 0; i < p.size(); ++i) p.v[i] = Vec<Dim>::Constant(p.x[i][0] + p.x[i][1] > 0.05 ? 1.0 : 0.0);
+  CellBins bins;
+  bin_particles<Dim>(g, p.x, bins);
+  for (TransferOptions o : {TransferOptions::paper_rbf(), TransferOptions::cubic_mls()}) {
+    FaceValues faces;
+    o.clamp = false;
+    particles_to_faces<Dim>(g, p, bins, o, faces);
+    double lo = 0.0, hi = 1.0;
+    g.for_each_face([&](FaceId f) { lo = std::min(lo, faces.value[f]), hi = std::max(hi, faces.value[f]); });
+    EXPECT_GT(std::max(-lo, hi - 1.0), 1e-3) << o.describe() << ": range " << lo << " .. " << hi;
+    o.clamp = true;
+    const TransferReport r = particles_to_faces<Dim>(g, p, bins, o, faces);
+    EXPECT_GT(r.clamped, 0);
+    g.for_each_face([&](FaceId f) {
+      EXPECT_GE(faces.value[f], 0.0);
+      EXPECT_LE(faces.value[f], 1.0);
+    });
+  }
+}
+
+TYPED_TEST(TransferTest, SameBitsOnOneAndSeveralThreads) {
+  constexpr int Dim = TypeParam::value;
+  const auto g = random_tree<Dim>(51, 2);
+  auto p = seeded<Dim>(g, 0.5);
+  for (int i = 0; i < p.size(); ++i) p.v[i] = Vec<Dim>::Constant(std::sin(3 * p.x[i][0]) * p.x[i][1]);
+  CellBins bins;
+  bin_particles<Dim>(g, p.x, bins);
+  const auto uniform =
+      tree::uniform<Dim>(Box<Dim>{Vec<Dim>::Constant(-1.0), Vec<Dim>::Constant(1.0)}, Dim == 2 ? 5 : 3);
+  const RegularLattice<Dim> lattice(uniform);
+  auto q = seeded<Dim>(uniform, 0.5);
+  const int apic = q.add_field("apic", Dim * Dim);
+  for (int i = 0; i < q.size(); ++i) q.v[i] = Vec<Dim>::Constant(std::cos(2 * q.x[i][1]));
+  CellBins qbins;
+  bin_particles<Dim>(uniform, q.x, qbins);
+
+  struct Outcome {
+    std::vector<double> rbf, mls, apic;
+    std::vector<Vec<Dim>> v_rbf, v_mls, v_apic;
+    std::vector<double> c_apic;
+  };
+  const auto run = [&] {
+    Outcome o;
+    FaceValues f;
+    particles_to_faces<Dim>(g, p, bins, TransferOptions::paper_rbf(), f);
+    o.rbf = f.value;
+    o.v_rbf.resize(p.size());
+    faces_to_points<Dim>(g, f.value, f.known, p.x, bins, TransferOptions::paper_rbf(), o.v_rbf);
+    particles_to_faces<Dim>(g, p, bins, TransferOptions::cubic_mls(), f);
+    o.mls = f.value;
+    o.v_mls.resize(p.size());
+    faces_to_points<Dim>(g, f.value, f.known, p.x, bins, TransferOptions::cubic_mls(), o.v_mls);
+    linear_to_faces<Dim>(uniform, lattice, q, qbins, RegularScheme::apic, {}, f);
+    o.apic = f.value;
+    o.v_apic.resize(q.size());
+    o.c_apic.resize(q.field(apic).size());
+    linear_to_points<Dim>(lattice, f.value, q.x, o.v_apic, o.c_apic);
+    return o;
+  };
+  const int threads = omp_get_max_threads();
+  omp_set_num_threads(1);
+  const Outcome one = run();
+  omp_set_num_threads(std::max(2, threads));
+  const Outcome many = run();
+  omp_set_num_threads(threads);
+  EXPECT_EQ(one.rbf, many.rbf);
+  EXPECT_EQ(one.mls, many.mls);
+  EXPECT_EQ(one.apic, many.apic);
+  EXPECT_EQ(one.v_rbf, many.v_rbf);
+  EXPECT_EQ(one.v_mls, many.v_mls);
+  EXPECT_EQ(one.v_apic, many.v_apic);
+  EXPECT_EQ(one.c_apic, many.c_apic);
+}
+
+TEST(Transfer, BadOptionsAndSizesAreRefused) {
+  const auto g = tree::uniform<2>(Box<2>{}, 3);
+  Particles<2> p;
+  p.push_back(Vec<2>(0.5, 0.5), Vec<2>(1, 1));
+  CellBins bins;
+  bin_particles<2>(g, p.x, bins);
+  FaceValues f;
+  TransferOptions o;
+  o.degree = 7;
+  EXPECT_THROW(particles_to_faces<2>(g, p, bins, o, f), Error);
+  o = {};
+  o.exponent = 4;
+  EXPECT_THROW(particles_to_faces<2>(g, p, bins, o, f), Error);
+  std::vector<double> u(3, 0.0);
+  std::vector<Vec<2>> v(1);
+  EXPECT_THROW(faces_to_points<2>(g, u, {}, p.x, bins, TransferOptions{}, v), Error);
+  EXPECT_THROW(flip_blend<2>(v, v, 1.5, v), Error);
+}
+
+}  // namespace
+}  // namespace liquid
