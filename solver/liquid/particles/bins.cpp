@@ -61,7 +61,6 @@ BinStats rebin(const CellGraph<Dim>& graph, std::span<const Vec<Dim>> x, CellBin
   }
   struct Counts {
     BinStats s;
-    std::vector<SideFace> sides;
   };
   BinStats total;
   parallel_for(
@@ -92,24 +91,12 @@ BinStats rebin(const CellGraph<Dim>& graph, std::span<const Vec<Dim>> x, CellBin
             return;
           }
         }
-        if (old != no_cell && graph.alive(old)) {
-          for (FaceId f : graph.faces(old)) {
-            const GraphFace& g = graph.face(f);
-            const CellId n = g.cell[0] == old ? g.cell[1] : g.cell[0];
-            if (n != no_cell && holds(graph, n, xi)) {
-              bins.cell[i] = n;
-              ++t.s.neighbour;
-              return;
-            }
-          }
-        }
         bins.cell[i] = graph.locate(xi);
         ++t.s.located;
       },
       [&](Counts& t) {
         total.stayed += t.s.stayed;
         total.remapped += t.s.remapped;
-        total.neighbour += t.s.neighbour;
         total.located += t.s.located;
       },
       1024);

@@ -35,7 +35,10 @@ void cell_points(const CellGraph<Dim>& graph, CellId c, const std::vector<Vec<Di
       for (int a = 0; a < Dim; ++a) {
         h = mix(h);
         const double r = static_cast<double>(h >> 11) * 0x1.0p-53 - 0.5;  // in [-0.5, 0.5)
-        u[a] = std::clamp(u[a] + jitter * spacing * r, 1e-6, 1.0 - 1e-6);
+        u[a] += jitter * spacing * r;
+        if (u[a] < 0.0) u[a] = -u[a];  // reflected back into the cell, not piled up on its side
+        if (u[a] >= 1.0) u[a] = 2.0 - u[a];
+        u[a] = std::clamp(u[a], 1e-9, 1.0 - 1e-9);
       }
     }
     out.push_back(b.lo + u.cwiseProduct(b.size()));

@@ -47,6 +47,8 @@ namespace {
 void check_options(const TransferOptions& o) {
   LIQUID_VERIFY(o.degree >= 0 && o.degree <= 4, "transfer: polynomial degree {} is outside [0, 4]", o.degree);
   LIQUID_VERIFY(o.rings >= 1 && o.rings <= 4, "transfer: {} rings is outside [1, 4]", o.rings);
+  LIQUID_VERIFY(o.wall_rings >= 0 && o.wall_rings <= 2, "transfer: {} wall rings is outside [0, 2]",
+                o.wall_rings);
   LIQUID_VERIFY(o.scheme == Scheme::mls || (o.exponent >= 1 && o.exponent <= 9 && o.exponent % 2 == 1),
                 "transfer: PHS exponent {} must be odd and in [1, 9]", o.exponent);
 }
@@ -90,9 +92,11 @@ struct Scratch {
   TransferReport report;
 };
 
-/// The stencil cells of a face: its cells and those within rings - 1 hops of them, sorted.
+/// The stencil cells of a face: its cells and those within rings - 1 hops of them (plus wall_rings
+/// at a domain-boundary face), sorted.
 template <int Dim>
-void face_cells(const CellGraph<Dim>& graph, FaceId f, int rings, Scratch& s) {
+void face_cells(const CellGraph<Dim>& graph, FaceId f, const TransferOptions& o, Scratch& s) {
+  const int rings = o.rings + (graph.face(f).is_boundary() ? o.wall_rings : 0);
   s.cells.clear();
   for (CellId c : graph.face(f).cell) {
     if (c == no_cell) continue;
@@ -121,7 +125,7 @@ TransferReport particles_to_faces(const CellGraph<Dim>& graph, const Particles<D
         const FaceId f = static_cast<FaceId>(fl);
         if (!graph.face_alive(f)) return;
         const int axis = graph.face(f).axis;
-        face_cells(graph, f, options.rings, s);
+        face_cells(graph, f, options, s);
         std::vector<Vec<Dim>> nodes;
         s.values.clear();
         for (CellId c : s.cells)
@@ -159,7 +163,7 @@ TransferReport particles_to_faces(const CellGraph<Dim>& graph, const Particles<D
         LIQUID_VERIFY(std::isfinite(value),
                       "particles_to_faces: non-finite value at face {} (axis {}, centre ({}))", f, axis,
                       fmt::join(at.data(), at.data() + Dim, ", "));
-        out.value[f] = clamp_to(value, lo, hi, options.clamp, s.report);
+        out.value[f] = clamp_to(value, lo, hi, options.clamp_faces, s.report);
         out.known[f] = 1;
         out.weight[f] = static_cast<double>(nodes.size());
       },

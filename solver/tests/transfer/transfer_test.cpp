@@ -216,19 +216,37 @@ TYPED_TEST(TransferTest, ClampingKeepsValuesInTheRangeOfTheirSources) {
   CellBins bins;
   bin_particles<Dim>(g, p.x, bins);
   for (TransferOptions o : {TransferOptions::paper_rbf(), TransferOptions::cubic_mls()}) {
+    // Particle -> face (clamp_faces, off by default).
     FaceValues faces;
-    o.clamp = false;
     particles_to_faces<Dim>(g, p, bins, o, faces);
     double lo = 0.0, hi = 1.0;
     g.for_each_face([&](FaceId f) { lo = std::min(lo, faces.value[f]), hi = std::max(hi, faces.value[f]); });
     EXPECT_GT(std::max(-lo, hi - 1.0), 1e-3) << o.describe() << ": range " << lo << " .. " << hi;
-    o.clamp = true;
+    o.clamp_faces = true;
     const TransferReport r = particles_to_faces<Dim>(g, p, bins, o, faces);
     EXPECT_GT(r.clamped, 0);
     g.for_each_face([&](FaceId f) {
       EXPECT_GE(faces.value[f], 0.0);
       EXPECT_LE(faces.value[f], 1.0);
     });
+    // Face -> particle (clamp, on by default) from the step sampled on the faces.
+    g.for_each_face([&](FaceId f) {
+      const Vec<Dim> x = g.face_centre(f);
+      faces.value[f] = x[0] + x[1] > 0.05 ? 1.0 : 0.0;
+    });
+    std::vector<Vec<Dim>> v(p.size());
+    o.clamp = false;
+    faces_to_points<Dim>(g, faces.value, {}, p.x, bins, o, v);
+    double vlo = 0.0, vhi = 1.0;
+    for (const auto& x : v) vlo = std::min(vlo, x.minCoeff()), vhi = std::max(vhi, x.maxCoeff());
+    EXPECT_GT(std::max(-vlo, vhi - 1.0), 1e-3) << o.describe();
+    o.clamp = true;
+    const TransferReport back = faces_to_points<Dim>(g, faces.value, {}, p.x, bins, o, v);
+    EXPECT_GT(back.clamped, 0);
+    for (const auto& x : v) {
+      EXPECT_GE(x.minCoeff(), 0.0);
+      EXPECT_LE(x.maxCoeff(), 1.0);
+    }
   }
 }
 
