@@ -1,0 +1,140 @@
+#include "liquid/transfer/velocity_field.hpp"
+
+#include <algorithm>
+#include <array>
+#include <optional>
+
+#include "liquid/core/error.hpp"
+#include "liquid/core/parallel.hpp"
+#include "liquid/rbf/interpolant.hpp"
+
+namespace liquid {
+
+template <int Dim>
+struct FaceVelocityField<Dim>::CellInterpolants {
+  std::array<std::optional<rbf::Interpolant<Dim>>, Dim> interp;
+  std::array<double, Dim> lo{}, hi{};  // range of the face values, for clamping
+  std::array<double, Dim> fallback{};  // the mean, when the interpolant is unusable
+  std::array<bool, Dim> empty{};
+};
+
+template <int Dim>
+FaceVelocityField<Dim>::FaceVelocityField(const CellGraph<Dim>& graph, std::span<const double> u,
+                                          std::span<const std::uint8_t> known, const TransferOptions& options,
+                                          std::span<const CellId> cells)
+    : graph_(&graph), u_(u.begin(), u.end()), known_(known.begin(), known.end()), options_(options) {
+  LIQUID_VERIFY(options.scheme == Scheme::rbf, "FaceVelocityField: scheme {} is not offered (rbf only)",
+                to_string(options.scheme));
+  LIQUID_VERIFY(static_cast<int>(u.size()) >= graph.face_capacity(),
+                "FaceVelocityField: {} face values for {} face ids", u.size(), graph.face_capacity());
+  LIQUID_VERIFY(known.empty() || known.size() == u.size(), "FaceVelocityField: {} known flags for {} faces",
+                known.size(), u.size());
+  std::vector<CellId> list(cells.begin(), cells.end());
+  if (list.empty()) list = graph.cell_ids();
+  slot_.assign(graph.cell_capacity(), -1);
+  prepared_.resize(list.size());
+  for (std::size_t i = 0; i < list.size(); ++i) {
+    LIQUID_VERIFY(graph.alive(list[i]), "FaceVelocityField: cell {} is not alive", list[i]);
+    slot_[list[i]] = static_cast<std::int32_t>(i);
+  }
+  parallel_for(
+      static_cast<long>(list.size()),
+      [&](long i) {
+        prepared_[i] = std::make_unique<CellInterpolants>();
+        prepare(list[i], *prepared_[i]);
+      },
+      16);
+}
+
+template <int Dim>
+FaceVelocityField<Dim>::FaceVelocityField(const CellGraph<Dim>& graph, const RegularLattice<Dim>& lattice,
+                                          std::span<const double> u)
+    : graph_(&graph), lattice_(&lattice), u_(u.begin(), u.end()) {
+  LIQUID_VERIFY(static_cast<int>(u.size()) >= graph.face_capacity(),
+                "FaceVelocityField: {} face values for {} face ids", u.size(), graph.face_capacity());
+}
+
+template <int Dim>
+FaceVelocityField<Dim>::~FaceVelocityField() = default;
+template <int Dim>
+FaceVelocityField<Dim>::FaceVelocityField(FaceVelocityField&&) noexcept = default;
+
+template <int Dim>
+void FaceVelocityField<Dim>::prepare(CellId c, CellInterpolants& out) const {
+  std::vector<CellId> ring;
+  graph_->k_ring(c, options_.rings, ring);
+  std::vector<FaceId> faces;
+  for (CellId r : ring)
+    for (FaceId f : graph_->faces(r))
+      if (known_.empty() || known_[f]) faces.push_back(f);
+  std::sort(faces.begin(), faces.end());
+  faces.erase(std::unique(faces.begin(), faces.end()), faces.end());
+  const rbf::Config config{options_.exponent, options_.degree};
+  std::vector<Vec<Dim>> nodes;
+  for (int axis = 0; axis < Dim; ++axis) {
+    nodes.clear();
+    Eigen::VectorXd values(static_cast<long>(faces.size()));
+    long n = 0;
+    for (FaceId f : faces)
+      if (graph_->face(f).axis == axis) {
+        nodes.push_back(graph_->face_centre(f));
+        values[n++] = u_[f];
+      }
+    values.conservativeResize(n);
+    out.empty[axis] = n == 0;
+    if (n == 0) continue;
+    out.lo[axis] = values.minCoeff();
+    out.hi[axis] = values.maxCoeff();
+    out.fallback[axis] = values.mean();
+    rbf::Interpolant<Dim> interp(nodes, config);
+    if (!interp.status().usable()) continue;
+    interp.fit(values);
+    out.interp[axis].emplace(std::move(interp));
+  }
+}
+
+template <int Dim>
+Vec<Dim> FaceVelocityField<Dim>::evaluate(const CellInterpolants& ci, const Vec<Dim>& x) const {
+  Vec<Dim> v;
+  for (int k = 0; k < Dim; ++k) {
+    if (ci.empty[k]) {
+      v[k] = 0.0;
+      continue;
+    }
+    double value = ci.interp[k] ? ci.interp[k]->value_at(x) : ci.fallback[k];
+    if (options_.clamp) value = std::clamp(value, ci.lo[k], ci.hi[k]);
+    v[k] = value;
+  }
+  return v;
+}
+
+template <int Dim>
+Vec<Dim> FaceVelocityField<Dim>::operator()(const Vec<Dim>& x) const {
+  LIQUID_VERIFY(x.allFinite(), "FaceVelocityField: non-finite evaluation point");
+  const Box<Dim>& d = graph_->domain();
+  const Vec<Dim> y = x.cwiseMax(d.lo).cwiseMin(d.hi);
+  if (lattice_) {
+    Vec<Dim> v;
+    for (int k = 0; k < Dim; ++k) {
+      const LinearStencil<Dim> st(*lattice_, k, y);
+      double value = 0.0;
+      for (int corner = 0; corner < (1 << Dim); ++corner) {
+        IVec<Dim> a = st.base;
+        for (int j = 0; j < Dim; ++j) a[j] += (corner >> j) & 1;
+        value += st.weight(corner) * u_[lattice_->face(k, a)];
+      }
+      v[k] = value;
+    }
+    return v;
+  }
+  const CellId c = graph_->locate(y);
+  if (slot_[c] >= 0) return evaluate(*prepared_[slot_[c]], y);
+  CellInterpolants local;
+  prepare(c, local);
+  return evaluate(local, y);
+}
+
+template class FaceVelocityField<2>;
+template class FaceVelocityField<3>;
+
+}  // namespace liquid

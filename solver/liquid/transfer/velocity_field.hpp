@@ -1,0 +1,58 @@
+#pragma once
+// A face velocity field that can be evaluated anywhere: what advection needs at the intermediate
+// points of its Runge-Kutta stages. On any tree, component k at x is the RBF interpolant of the
+// axis-k faces around x's cell (the stencil of faces_to_points); the interpolants of the cells
+// named at construction are factorised once, up front and in parallel, so an evaluation there costs
+// one point location and Dim short sums. On a uniform tree the multilinear interpolation of the
+// regular baselines is available instead (RegularLattice).
+//
+//   const FaceVelocityField<2> u(graph, faces.value, faces.known, TransferOptions::paper_rbf());
+//   advect<2>(particles.x, dt, Integrator::rk3, u, graph.domain());
+
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <vector>
+
+#include "liquid/transfer/regular.hpp"
+#include "liquid/transfer/scattered.hpp"
+#include "liquid/tree/cell_graph.hpp"
+
+namespace liquid {
+
+template <int Dim>
+class FaceVelocityField {
+ public:
+  /// RBF (options.scheme must be rbf) on any tree. `u` and `known` (empty: all known) are copied.
+  /// `cells`: the cells to prepare (empty: every cell); elsewhere an evaluation factorises on the
+  /// fly. Evaluations are thread-safe.
+  FaceVelocityField(const CellGraph<Dim>& graph, std::span<const double> u,
+                    std::span<const std::uint8_t> known, const TransferOptions& options,
+                    std::span<const CellId> cells = {});
+  /// Multilinear interpolation on a uniform tree.
+  FaceVelocityField(const CellGraph<Dim>& graph, const RegularLattice<Dim>& lattice,
+                    std::span<const double> u);
+  ~FaceVelocityField();
+  FaceVelocityField(FaceVelocityField&&) noexcept;
+
+  /// The velocity at x (clamped onto the domain). Throws on a non-finite x.
+  Vec<Dim> operator()(const Vec<Dim>& x) const;
+
+ private:
+  struct CellInterpolants;
+  void prepare(CellId c, CellInterpolants& out) const;
+  Vec<Dim> evaluate(const CellInterpolants& ci, const Vec<Dim>& x) const;
+
+  const CellGraph<Dim>* graph_ = nullptr;
+  const RegularLattice<Dim>* lattice_ = nullptr;
+  std::vector<double> u_;
+  std::vector<std::uint8_t> known_;
+  TransferOptions options_;
+  std::vector<std::int32_t> slot_;  // per cell id: index into prepared_, or -1
+  std::vector<std::unique_ptr<CellInterpolants>> prepared_;
+};
+
+extern template class FaceVelocityField<2>;
+extern template class FaceVelocityField<3>;
+
+}  // namespace liquid
