@@ -71,6 +71,7 @@ PAPER = {
     "poisson-hard": "levels up to 2 tried in the paper (section 8)",
     "poisson-stencil-rules": "1-ring grown by k-ring (section 4.2)",
     "poisson-rbf-degree": "degree 2 (Pi_2, section 7), about 2 for p and grad p",
+    "hydrostatic-pool": "still: small drift, spurious speed and pressure error (RBF Liquids, Fig. 16)",
     "transfer-accuracy": "RBF below MLS (RBF Liquids, Fig. 4); RBF keeps more energy than PIC (Fig. 10)",
 }
 

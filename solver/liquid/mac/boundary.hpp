@@ -1,8 +1,12 @@
 #pragma once
 // What a Poisson problem knows beyond its unknowns: a Dirichlet interface (the zero set of a level
-// set, unknowns where it is negative), Dirichlet or Neumann values on the domain's walls.
+// set, unknowns where it is negative), or unknowns given cell by cell with the other cells as
+// Dirichlet nodes at their centres (the paper's air cells); Dirichlet or Neumann values on the
+// domain's walls.
 
+#include <cstdint>
 #include <functional>
+#include <vector>
 
 #include "liquid/core/types.hpp"
 #include "liquid/levelset/levelset.hpp"
@@ -17,6 +21,14 @@ struct Boundary {
   /// Neumann walls: dp/dn along the outward unit normal n at wall point x (a moving wall's flux, or
   /// a manufactured solution's). Empty: dp/dn = 0, the paper's resting solid walls.
   std::function<double(const Vec<Dim>& x, const Vec<Dim>& n)> wall_flux;
+  /// Unknowns given cell by cell (per cell id, nonzero: an unknown) instead of by the level set's
+  /// sign. Without a level set every other cell is an air cell: a Dirichlet node at its own centre
+  /// carrying `dirichlet` there (the paper's free surface, p = 0 in the air; first order in the
+  /// position of the surface). With a level set, edges towards the other cells are cut at its zero
+  /// set as usual.
+  std::vector<std::uint8_t> unknown_cells;
+
+  bool air_cells() const { return !unknown_cells.empty() && !levelset; }
 
   /// dp/dn at wall point x of the wall normal to `axis` on side `dir` (-1 low, +1 high).
   double flux(const Vec<Dim>& x, int axis, int dir) const {

@@ -1,6 +1,8 @@
 #pragma once
 // The numbering of a Poisson problem's unknowns: which cells carry one, and its index.
 
+#include <cstdint>
+#include <span>
 #include <vector>
 
 #include "liquid/levelset/levelset.hpp"
@@ -22,5 +24,10 @@ struct DofLayout {
 /// not finite, and when no cell is inside.
 template <int Dim>
 DofLayout<Dim> number_unknowns(const CellGraph<Dim>& graph, const levelset::Function<Dim>& inside);
+
+/// Unknowns at the alive cells c with mask[c] != 0 (mask.size() >= graph.cell_capacity()), in the
+/// graph's cell order. Throws liquid::Error when the mask is too short or selects no cell.
+template <int Dim>
+DofLayout<Dim> number_unknowns(const CellGraph<Dim>& graph, std::span<const std::uint8_t> mask);
 
 }  // namespace liquid::mac

@@ -29,9 +29,13 @@ std::vector<double> face_normal_derivative(const CellGraph<Dim>& graph, const Do
         const GraphFace& g = graph.face(f);
         if (g.is_boundary()) return;
         const int ia = layout.dof_of_cell[g.cell[0]], ib = layout.dof_of_cell[g.cell[1]];
-        if (ia < 0 || ib < 0) return;
+        if (ia < 0 && ib < 0) return;
+        if ((ia < 0 || ib < 0) && !boundary.air_cells()) return;
         if (!g.hanging() && g.side_level[0] == g.side_level[1]) {
-          out[f] = (p[ib] - p[ia]) / graph.cell_size(g.cell[0])[g.axis];
+          // An air side carries its Dirichlet value at its centre.
+          const double pa = ia >= 0 ? p[ia] : boundary.dirichlet(graph.centre(g.cell[0]));
+          const double pb = ib >= 0 ? p[ib] : boundary.dirichlet(graph.centre(g.cell[1]));
+          out[f] = (pb - pa) / graph.cell_size(g.cell[0])[g.axis];
           return;
         }
         const Vec<Dim> at = graph.face_centre(f);

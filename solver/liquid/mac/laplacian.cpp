@@ -60,6 +60,12 @@ RowKind fd_row(const CellGraph<Dim>& graph, const DofLayout<Dim>& layout, const 
           return;
         }
         const Vec<Dim> y = graph.centre(sf.neighbour);
+        if (boundary.air_cells()) {  // the air cell's centre carries the value
+          d[s] = std::abs(y[k] - x[k]);
+          dof[s] = -1;
+          val[s] = boundary.dirichlet(y);
+          return;
+        }
         const auto cut =
             levelset::crossing<Dim>(boundary.levelset, x, y, boundary.levelset(x), boundary.levelset(y));
         LIQUID_VERIFY(cut.has_value(), "cell {}: no interface crossing towards outside neighbour {}", c,

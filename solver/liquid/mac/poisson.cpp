@@ -50,7 +50,7 @@ std::vector<Row> laplacian_rows(const CellGraph<Dim>& graph, const PoissonSystem
           row.rhs = problem.pin_value(graph.centre(c));
           return;
         }
-        row.rhs = -problem.f(graph.centre(c));
+        row.rhs = problem.f_cells.empty() ? -problem.f(graph.centre(c)) : -problem.f_cells[c];
         if (!std::isfinite(row.rhs)) {
           const Vec<Dim> x = graph.centre(c);
           throw Error(fmt::format("the right-hand side f is {} at the centre ({:.6g}) of cell {}", row.rhs,
@@ -135,15 +135,23 @@ void fill_matrix(const CellGraph<Dim>& graph, const std::vector<Row>& rows, Pois
 template <int Dim>
 PoissonSystem<Dim> assemble_poisson(const CellGraph<Dim>& graph, const PoissonProblem<Dim>& problem,
                                     const PoissonOptions& options) {
-  LIQUID_VERIFY(problem.f, "Poisson problem without a right-hand side");
+  LIQUID_VERIFY(problem.f || !problem.f_cells.empty(), "Poisson problem without a right-hand side");
+  LIQUID_VERIFY(problem.f_cells.empty() || static_cast<int>(problem.f_cells.size()) >= graph.cell_capacity(),
+                "Poisson problem: {} right-hand-side values for {} cell ids", problem.f_cells.size(),
+                graph.cell_capacity());
   LIQUID_VERIFY(!problem.boundary.levelset || problem.boundary.dirichlet,
                 "a level-set problem needs its Dirichlet value function");
+  LIQUID_VERIFY(!problem.boundary.air_cells() || problem.boundary.dirichlet,
+                "air cells need their Dirichlet value function");
   LIQUID_VERIFY(!problem.boundary.dirichlet_walls || problem.boundary.dirichlet,
                 "Dirichlet walls need their value function");
   Stopwatch watch;
   PoissonSystem<Dim> sys;
   sys.boundary = problem.boundary;
-  sys.layout = number_unknowns<Dim>(graph, problem.boundary.levelset);
+  sys.layout =
+      problem.boundary.unknown_cells.empty()
+          ? number_unknowns<Dim>(graph, problem.boundary.levelset)
+          : number_unknowns<Dim>(graph, std::span<const std::uint8_t>(problem.boundary.unknown_cells));
   // No Dirichlet value anywhere: Neumann walls and every cell an unknown.
   sys.singular = !problem.boundary.dirichlet_walls && sys.n_unknowns() == graph.n_cells();
   sys.bordered = sys.singular && options.nullspace == Nullspace::zero_mean;

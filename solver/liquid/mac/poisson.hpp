@@ -25,8 +25,9 @@ namespace liquid::mac {
 
 template <int Dim>
 struct PoissonProblem {
-  std::function<double(const Vec<Dim>&)> f;          ///< right-hand side of Lap p = f
-  Boundary<Dim> boundary;                            ///< interface, walls and their values
+  std::function<double(const Vec<Dim>&)> f;  ///< right-hand side of Lap p = f
+  std::vector<double> f_cells;  ///< per cell id: f at the cell (used instead of f when not empty)
+  Boundary<Dim> boundary;       ///< interface, walls and their values
   std::function<double(const Vec<Dim>&)> pin_value;  ///< p at the pinned centre (Nullspace::pin)
 };
 

@@ -123,6 +123,22 @@ void gather_stencil(const CellGraph<Dim>& graph, const DofLayout<Dim>& layout, c
     const int dof = layout.dof_of_cell[c];
     const Vec<Dim> x = graph.centre(c);
     if (dof < 0) {
+      // An air cell next to an unknown: a Dirichlet node at its centre. Air cells further out are
+      // not the boundary (p there is not the continuation of p inside) and are left out, as cells
+      // behind the interface are in the level-set case.
+      if (boundary.air_cells()) {
+        bool touches = false;
+        for (FaceId f : graph.faces(c)) {
+          const GraphFace& g = graph.face(f);
+          const CellId o = g.cell[0] == c ? g.cell[1] : g.cell[0];
+          if (o != no_cell && layout.dof_of_cell[o] >= 0) {
+            touches = true;
+            break;
+          }
+        }
+        if (touches) out.push_back({x, -1, boundary.dirichlet(x)});
+        continue;
+      }
       // Outside the liquid: the interface point on the segment from the anchor carries the value.
       if (!boundary.levelset) continue;
       const double phi_a = boundary.levelset(anchor), phi_x = boundary.levelset(x);

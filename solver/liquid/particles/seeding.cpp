@@ -122,7 +122,7 @@ ReseedReport reseed(const CellGraph<Dim>& graph, std::span<const CellId> cells, 
   for (CellId c : cells) {
     if (!graph.alive(c)) continue;
     const int n = bins.count(c);
-    if (n == 0 || (n >= lo && n <= hi)) continue;
+    if ((n == 0 && !options.fill_empty) || (n >= lo && n <= hi)) continue;
     for (std::int32_t p : bins.of(c)) remove[p] = 1;
     report.deleted += n;
     chosen.push_back(c);

@@ -49,6 +49,8 @@ struct ReseedOptions {
   int per_cell = 0;  ///< new particles per reseeded cell; 0 means 2^Dim
   double jitter = 0.0;
   std::uint64_t seed = 1;
+  bool fill_empty =
+      false;  ///< also seed listed cells that hold no particle (holes the caller knows are fluid)
 };
 
 struct ReseedReport {
@@ -60,8 +62,8 @@ struct ReseedReport {
 /// Reseeds each cell of `cells` (the caller's fluid cells; the paper leaves surface cells alone)
 /// whose particle count is outside [lo, hi]: its particles are removed and per_cell Halton points
 /// take their place, with velocities from `velocity` (required). A cell with no particles is not
-/// fluid and is left alone. `bins` must be current; it is current again on return (new particles
-/// at the end, survivors in their old order). Deterministic.
+/// fluid and is left alone, unless options.fill_empty says the caller knows it is. `bins` must be current; it
+/// is current again on return (new particles at the end, survivors in their old order). Deterministic.
 template <int Dim>
 ReseedReport reseed(const CellGraph<Dim>& graph, std::span<const CellId> cells, const ReseedOptions& options,
                     const VelocitySource<Dim>& velocity, Particles<Dim>& particles, CellBins& bins);

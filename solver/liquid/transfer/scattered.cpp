@@ -9,6 +9,7 @@
 #include "liquid/core/error.hpp"
 #include "liquid/core/parallel.hpp"
 #include "liquid/rbf/interpolant.hpp"
+#include "liquid/rbf/polynomial.hpp"
 #include "liquid/rbf/weights.hpp"
 #include "liquid/transfer/mls.hpp"
 
@@ -16,6 +17,11 @@ namespace liquid {
 
 const char* to_string(Scheme scheme) {
   return scheme == Scheme::rbf ? "rbf" : "mls";
+}
+
+int TransferOptions::node_cap(int dim) const {
+  if (max_nodes < 0) return 0;
+  return max_nodes > 0 ? max_nodes : 4 * rbf::n_polynomial_terms(dim, degree);
 }
 
 std::string TransferOptions::describe() const {
@@ -85,6 +91,24 @@ double clamp_to(double v, double lo, double hi, bool clamp, TransferReport& r) {
   return v;
 }
 
+/// Keeps the `cap` nodes nearest to `at` (ties kept in their order), with their values.
+template <int Dim>
+void keep_nearest(std::vector<Vec<Dim>>& nodes, std::vector<double>& values, const Vec<Dim>& at, int cap) {
+  if (cap <= 0 || static_cast<int>(nodes.size()) <= cap) return;
+  std::vector<int> order(nodes.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int>(i);
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) {
+    return (nodes[a] - at).squaredNorm() < (nodes[b] - at).squaredNorm();
+  });
+  order.resize(cap);
+  std::sort(order.begin(), order.end());
+  std::vector<Vec<Dim>> n2;
+  std::vector<double> v2;
+  for (int i : order) n2.push_back(nodes[i]), v2.push_back(values[i]);
+  nodes.swap(n2);
+  values.swap(v2);
+}
+
 struct Scratch {
   std::vector<CellId> cells, ring;
   std::vector<std::int32_t> ids;
@@ -118,6 +142,7 @@ TransferReport particles_to_faces(const CellGraph<Dim>& graph, const Particles<D
                 particles.size());
   out.reset(graph.face_capacity());
   const rbf::Config config{options.exponent, options.degree};
+  const int node_cap = options.node_cap(Dim);
   TransferReport total;
   parallel_for(
       graph.face_capacity(), [] { return Scratch{}; },
@@ -139,6 +164,7 @@ TransferReport particles_to_faces(const CellGraph<Dim>& graph, const Particles<D
           return;
         }
         const Vec<Dim> at = graph.face_centre(f);
+        keep_nearest<Dim>(nodes, s.values, at, node_cap);
         int used = 0;
         if (options.scheme == Scheme::rbf) {
           const rbf::Status st = rbf::weights<Dim>(nodes, at, rbf::Operator<Dim>::identity(), config, s.w);

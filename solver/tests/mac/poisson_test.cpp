@@ -76,6 +76,54 @@ void dirichlet_quadratic_is_exact() {
   EXPECT_LT(err_grad, 1e-7);
 }
 
+/// The paper's free surface: unknowns at masked cells, the other cells Dirichlet at their centres.
+/// Exact for quadratics, and so are the face derivatives between unknowns and air cells.
+template <int Dim>
+void air_cells_quadratic_is_exact() {
+  const CellGraph<Dim> graph = non_graded<Dim>(Dim == 2 ? 4 : 2);
+  const auto blob = levelset::sphere<Dim>(Vec<Dim>::Constant(0.05), 0.7);
+  PoissonProblem<Dim> problem;
+  problem.f_cells.assign(graph.cell_capacity(), quad_laplacian<Dim>(Vec<Dim>::Zero()));
+  problem.boundary.dirichlet = quad<Dim>;
+  problem.boundary.unknown_cells.assign(graph.cell_capacity(), 0);
+  graph.for_each_cell([&](CellId c) { problem.boundary.unknown_cells[c] = blob(graph.centre(c)) < 0.0; });
+  const PoissonSystem<Dim> sys = assemble_poisson<Dim>(graph, problem, PoissonOptions{});
+  EXPECT_FALSE(sys.singular);
+  EXPECT_GT(sys.stats.n_rbf_rows, 0);
+  linalg::Vector p;
+  const auto st = linalg::solve(sys.A, sys.b, p, {linalg::SolverKind::direct});
+  ASSERT_TRUE(st.converged()) << st.describe();
+  double err = 0.0;
+  for (long i = 0; i < sys.n_unknowns(); ++i)
+    err = std::max(err, std::abs(p[i] - quad<Dim>(graph.centre(sys.layout.cell_of_dof[i]))));
+  EXPECT_LT(err, 1e-9);
+  const auto dn = face_normal_derivative<Dim>(graph, sys, PoissonOptions{}, p);
+  double err_grad = 0.0;
+  long n_air_faces = 0;
+  graph.for_each_face([&](FaceId f) {
+    const GraphFace& g = graph.face(f);
+    if (g.is_boundary()) return;
+    const bool a = sys.layout.is_unknown(g.cell[0]), b = sys.layout.is_unknown(g.cell[1]);
+    if (!a && !b) {
+      EXPECT_TRUE(std::isnan(dn[f]));
+      return;
+    }
+    n_air_faces += a != b;
+    err_grad = std::max(err_grad, std::abs(dn[f] - quad_gradient<Dim>(graph.face_centre(f))[g.axis]));
+  });
+  EXPECT_GT(n_air_faces, 0);
+  EXPECT_LT(err_grad, 1e-7);
+  problem.boundary.dirichlet = nullptr;
+  EXPECT_THROW(assemble_poisson<Dim>(graph, problem, PoissonOptions{}), Error);
+}
+
+TEST(Poisson, AirCellsQuadraticIsExactOnNonGradedQuadtree) {
+  air_cells_quadratic_is_exact<2>();
+}
+TEST(Poisson, AirCellsQuadraticIsExactOnNonGradedOctree) {
+  air_cells_quadratic_is_exact<3>();
+}
+
 TEST(Poisson, DirichletQuadraticIsExactOnNonGradedQuadtree) {
   dirichlet_quadratic_is_exact<2>();
 }

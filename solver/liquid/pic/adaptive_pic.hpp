@@ -1,0 +1,179 @@
+#pragma once
+// AdaptivePic<Dim>: the liquid solver of RBF Liquids (Secs. 4-5). A Cellgraph refined in a narrow
+// band around the liquid surface, particles carrying the velocity, RBF transfers between them and
+// the faces, and the PPE of `mac` with the air cells at p = 0. With `adaptive = false` the same
+// class runs on a uniform tree with the regular PIC/FLIP/APIC transfers: the paper's baselines.
+//
+// advance(dt) reads as the phases of ARCHITECTURE.md, each timed under its name:
+//   classify -> grid -> p2g -> forces -> laplacian -> ppe -> project -> extrapolate -> g2p ->
+//   advect -> reseed
+// Density is 1 (pressure in units of velocity^2). Walls are the domain's sides, free-slip: the
+// normal velocity is zero there and dp/dn = 0. The divergence is the finite-volume flux sum (it
+// conserves: mac/divergence.hpp); the Laplacian is mac's (FD where regular, RBF-FD at T-junctions).
+//
+//   PicOptions<2> o;  o.domain = ...;  o.coarse_level = 3;  o.fine_level = 6;
+//   AdaptivePic<2> sim(o);
+//   sim.seed(levelset::box<2>(...));
+//   while (sim.time() < 2.0) sim.advance(sim.stable_dt(1.0, 0.01));
+
+#include <functional>
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "liquid/core/timer.hpp"
+#include "liquid/linalg/solver.hpp"
+#include "liquid/mac/laplacian.hpp"
+#include "liquid/mac/poisson.hpp"
+#include "liquid/particles/advect.hpp"
+#include "liquid/particles/bins.hpp"
+#include "liquid/particles/seeding.hpp"
+#include "liquid/pic/classify.hpp"
+#include "liquid/transfer/face_values.hpp"
+#include "liquid/transfer/regular.hpp"
+#include "liquid/transfer/scattered.hpp"
+
+namespace liquid {
+
+/// How velocity moves between particles and faces: rbf (the paper's, any tree), or the regular
+/// baselines pic, flip and apic (multilinear weights; a uniform tree, adaptive = false).
+enum class PicTransfer { rbf, pic, flip, apic };
+const char* to_string(PicTransfer transfer);
+/// "rbf", "pic", "flip", "apic"; throws naming the choices.
+PicTransfer parse_pic_transfer(const std::string& name);
+
+template <int Dim>
+struct PicOptions {
+  Box<Dim> domain{Vec<Dim>::Zero(), Vec<Dim>::Ones()};
+  bool adaptive = true;  ///< false: a uniform tree at fine_level (the regular baselines)
+  int coarse_level = 3;  ///< level of the liquid's interior, far from the surface (adaptive)
+  int fine_level = 6;    ///< level of the band around the surface
+  int band = 2;          ///< cells within this many face hops of a surface cell are at fine_level
+  int max_jump = 2;      ///< level jump limit between face neighbours (1-4, or unlimited_jump)
+  Vec<Dim> gravity = default_gravity();
+  PicTransfer transfer = PicTransfer::rbf;
+  double flip = 0.95;  ///< FLIP's blend for transfer = flip (1: pure FLIP, 0: PIC)
+  TransferOptions rbf = stable_rbf();
+  Integrator integrator = Integrator::rk2;
+  double advect_cfl = 1.0;  ///< advection substeps keep |v| dt_sub <= advect_cfl * finest h
+  int extrapolation_layers = 4;
+  bool reseed = true;
+  ReseedOptions reseeding;  ///< ranges [3, 12] (2D) and [5, 15] (3D) by default
+  mac::PoissonOptions poisson = paper_poisson();
+  linalg::SolveOptions solver{linalg::SolverKind::bicgstab_ilut, 1e-8};
+  bool continue_on_ppe_failure = false;  ///< false: a PPE that does not converge stops the run
+
+  /// The paper's operator settings for the PIC step: PHS r^3 with degree 2 for the Laplacian rows
+  /// and the face gradients (mac's default of degree 3 is for the convergence studies; see
+  /// poisson-rbf-degree). Measured on the still pool (3D, adaptive): laplacian + project 0.24 s a
+  /// step with degree 3, 0.042 s with degree 2.
+  static mac::PoissonOptions paper_poisson() {
+    mac::PoissonOptions p;
+    p.rbf.degree = 2;
+    p.gradient_degree = 2;
+    return p;
+  }
+  /// The paper's RBF transfer with particle -> face clamping on. Without it the interpolant's
+  /// extrapolation at free-surface and hanging faces feeds on itself: a 2D dam break (finest level
+  /// 6) blew up at t = 0.1 s on the adaptive tree and on a uniform one; clamped, both run stable
+  /// with the regular APIC's front (0.92 against 0.93 at t = 0.25 s). The price is accuracy of a
+  /// single transfer (transfer-accuracy: round-trip order 0.67 clamped against 2.3).
+  static TransferOptions stable_rbf() {
+    TransferOptions t = TransferOptions::paper_rbf();
+    t.clamp_faces = true;
+    return t;
+  }
+  static Vec<Dim> default_gravity() {
+    Vec<Dim> g = Vec<Dim>::Zero();
+    g[1] = -9.81;
+    return g;
+  }
+};
+
+/// What one step did.
+struct PicStepReport {
+  long step = 0;
+  double time = 0.0;  ///< after the step
+  double dt = 0.0;
+  long n_particles = 0, n_cells = 0, n_fluid_cells = 0, n_surface_cells = 0;
+  long n_split = 0, n_merged = 0;  ///< grid changes
+  long n_filled = 0;               ///< particles created in holes and in new children of interior cells
+  int n_substeps = 1;
+  linalg::SolveStats ppe;
+  TransferReport p2g, g2p;
+  long unknown_faces = 0;  ///< faces no particle reached, before extrapolation
+  AdvectReport advect;
+  ReseedReport reseed;
+};
+
+template <int Dim>
+class AdaptivePic {
+ public:
+  explicit AdaptivePic(const PicOptions<Dim>& options);
+  ~AdaptivePic();
+  AdaptivePic(AdaptivePic&&) noexcept;
+
+  /// Fills the liquid region (level set < 0) with 2^Dim Halton particles per cell of a tree refined
+  /// around its surface; velocities from `velocity` (zero when empty). Call once, before advance().
+  void seed(const levelset::Function<Dim>& liquid,
+            const std::function<Vec<Dim>(const Vec<Dim>&)>& velocity = {});
+  /// One time step of length dt (> 0). Throws liquid::Error naming the phase and the cell or particle
+  /// when a field becomes NaN or infinite, and when the PPE does not converge (unless the options
+  /// say to go on; the report then says so).
+  PicStepReport advance(double dt);
+  /// cfl * finest h / (largest particle speed), at most max_dt.
+  double stable_dt(double cfl, double max_dt) const;
+
+  const PicOptions<Dim>& options() const { return options_; }
+  const CellGraph<Dim>& graph() const { return graph_; }
+  const Particles<Dim>& particles() const { return particles_; }
+  const CellBins& bins() const { return bins_; }
+  const pic::Classification& classification() const { return cls_; }
+  /// Face velocities after the last step (normal components, by face id) and which are known.
+  std::span<const double> face_velocity() const { return u_; }
+  std::span<const std::uint8_t> face_known() const { return known_; }
+  /// Pressure by cell id after the last step (0 in air cells).
+  std::span<const double> pressure() const { return p_; }
+  const PhaseTimer& timer() const { return timer_; }
+  double time() const { return time_; }
+  long step() const { return step_; }
+  double finest_h() const;
+
+ private:
+  void classify();
+  void adapt_grid(PicStepReport& r);
+  void fill(std::span<const CellId> cells, PicStepReport& r);
+  void to_faces(PicStepReport& r);
+  void forces(double dt);
+  void assemble(double dt);
+  void solve_pressure(PicStepReport& r);
+  void project(double dt);
+  void extrapolate();
+  void to_particles(PicStepReport& r);
+  void advect(double dt, PicStepReport& r);
+  void reseed(PicStepReport& r);
+  VelocitySource<Dim> grid_velocity() const;
+  void check_faces(const char* phase) const;
+  void check_particles(const char* phase) const;
+
+  PicOptions<Dim> options_;
+  CellGraph<Dim> graph_;
+  std::unique_ptr<RegularLattice<Dim>> lattice_;
+  Particles<Dim> particles_;
+  CellBins bins_;
+  pic::Classification cls_;
+  std::vector<double> u_, u_transferred_, p_;
+  std::vector<std::uint8_t> known_;
+  mac::PoissonSystem<Dim> system_;
+  PhaseTimer timer_;
+  double time_ = 0.0;
+  long step_ = 0;
+  int apic_field_ = -1;
+  bool seeded_ = false;
+};
+
+extern template class AdaptivePic<2>;
+extern template class AdaptivePic<3>;
+
+}  // namespace liquid

@@ -1,0 +1,84 @@
+#include "liquid/pic/classify.hpp"
+
+#include <algorithm>
+
+#include "liquid/core/error.hpp"
+#include "liquid/core/parallel.hpp"
+
+namespace liquid::pic {
+
+template <int Dim>
+void classify_cells(const CellGraph<Dim>& graph, const CellBins& bins, Classification& out) {
+  const int cap = graph.cell_capacity();
+  out.type.assign(cap, CellType::air);
+  out.fluid.clear(), out.surface.clear(), out.filled.clear();
+  graph.for_each_cell([&](CellId c) {
+    if (bins.count(c) > 0) out.type[c] = CellType::fluid;
+  });
+  // Holes: empty cells surrounded by fluid (or walls).
+  graph.for_each_cell([&](CellId c) {
+    if (out.type[c] == CellType::fluid) return;
+    bool enclosed = true;
+    for (FaceId f : graph.faces(c)) {
+      const GraphFace& g = graph.face(f);
+      const CellId n = g.cell[0] == c ? g.cell[1] : g.cell[0];
+      if (n != no_cell && bins.count(n) == 0) {
+        enclosed = false;
+        break;
+      }
+    }
+    if (enclosed) out.filled.push_back(c);
+  });
+  for (CellId c : out.filled) out.type[c] = CellType::fluid;
+  graph.for_each_cell([&](CellId c) {
+    if (out.type[c] != CellType::fluid) return;
+    out.fluid.push_back(c);
+    for (FaceId f : graph.faces(c)) {
+      const GraphFace& g = graph.face(f);
+      const CellId n = g.cell[0] == c ? g.cell[1] : g.cell[0];
+      if (n != no_cell && out.type[n] != CellType::fluid) {
+        out.surface.push_back(c);
+        break;
+      }
+    }
+  });
+}
+
+template <int Dim>
+void mark_band(const CellGraph<Dim>& graph, const Classification& cls, int band, int coarse_level,
+               int fine_level, MarkList& marks) {
+  LIQUID_VERIFY(band >= 0 && coarse_level >= 0 && coarse_level <= fine_level,
+                "mark_band: band {} and levels {} <= {} are not valid", band, coarse_level, fine_level);
+  marks.clear();
+  // Breadth first from the surface, `band` hops deep.
+  std::vector<std::uint8_t> near(graph.cell_capacity(), 0);
+  std::vector<CellId> frontier(cls.surface.begin(), cls.surface.end()), next;
+  for (CellId c : frontier) near[c] = 1;
+  for (int hop = 0; hop < band && !frontier.empty(); ++hop) {
+    next.clear();
+    for (CellId c : frontier)
+      for (FaceId f : graph.faces(c)) {
+        const GraphFace& g = graph.face(f);
+        const CellId n = g.cell[0] == c ? g.cell[1] : g.cell[0];
+        if (n != no_cell && !near[n]) {
+          near[n] = 1;
+          next.push_back(n);
+        }
+      }
+    frontier.swap(next);
+  }
+  graph.for_each_cell([&](CellId c) {
+    const int target = near[c] ? fine_level : coarse_level;
+    if (graph.level(c) < target)
+      marks.split.push_back(c);
+    else if (graph.level(c) > target)
+      marks.merge.push_back(c);
+  });
+}
+
+template void classify_cells<2>(const CellGraph<2>&, const CellBins&, Classification&);
+template void classify_cells<3>(const CellGraph<3>&, const CellBins&, Classification&);
+template void mark_band<2>(const CellGraph<2>&, const Classification&, int, int, int, MarkList&);
+template void mark_band<3>(const CellGraph<3>&, const Classification&, int, int, int, MarkList&);
+
+}  // namespace liquid::pic

@@ -1,0 +1,120 @@
+// The PIC solver: classification and band marks on plain data; a still pool stays still over a
+// few steps, adaptive and regular; bad options are refused.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "liquid/core/error.hpp"
+#include "liquid/pic/adaptive_pic.hpp"
+
+namespace liquid {
+namespace {
+
+template <int Dim>
+AdaptivePic<Dim> pool(bool adaptive, PicTransfer transfer, int fine) {
+  PicOptions<Dim> o;
+  o.adaptive = adaptive;
+  o.transfer = transfer;
+  o.fine_level = fine;
+  o.coarse_level = fine - 2;
+  AdaptivePic<Dim> sim(o);
+  Vec<Dim> hi = Vec<Dim>::Ones();
+  hi[1] = 0.5;
+  sim.seed(levelset::box<Dim>({Vec<Dim>::Zero(), hi}));
+  return sim;
+}
+
+TEST(AdaptivePic, StillPoolStaysStill2D) {
+  for (auto [adaptive, transfer] : {std::pair{true, PicTransfer::rbf}, std::pair{false, PicTransfer::apic}}) {
+    AdaptivePic<2> sim = pool<2>(adaptive, transfer, 5);
+    for (int s = 0; s < 10; ++s) {
+      const PicStepReport r = sim.advance(0.01);
+      ASSERT_TRUE(r.ppe.converged()) << r.ppe.describe();
+    }
+    double vmax = 0.0;
+    for (const auto& v : sim.particles().v) vmax = std::max(vmax, v.norm());
+    EXPECT_LT(vmax, 1e-2 * std::sqrt(9.81 * 0.5)) << to_string(transfer);
+    for (const char* phase : {"classify", "grid", "p2g", "forces", "laplacian", "ppe", "project",
+                              "extrapolate", "g2p", "advect", "reseed", "total"})
+      if (adaptive || std::string(phase) != "grid")
+        EXPECT_EQ(sim.timer().entries().at(phase).calls, 10) << phase;
+  }
+}
+
+TEST(AdaptivePic, DamBreakRunsStableAndSpreads2D) {
+  // A column of liquid collapses: the front must advance, the speed stay below free fall from
+  // the column's height (with margin), and nothing become NaN; adaptive RBF and regular APIC.
+  for (auto [adaptive, transfer] : {std::pair{true, PicTransfer::rbf}, std::pair{false, PicTransfer::apic}}) {
+    PicOptions<2> o;
+    o.adaptive = adaptive;
+    o.transfer = transfer;
+    o.fine_level = 5;
+    o.coarse_level = 2;
+    AdaptivePic<2> sim(o);
+    sim.seed(levelset::box<2>({Vec<2>::Zero(), Vec<2>(0.4, 0.6)}));
+    while (sim.time() < 0.2) sim.advance(sim.stable_dt(1.0, 0.01));
+    double front = 0.0, vmax = 0.0;
+    for (const auto& x : sim.particles().x) front = std::max(front, x[0]);
+    for (const auto& v : sim.particles().v) vmax = std::max(vmax, v.norm());
+    EXPECT_GT(front, 0.55) << to_string(transfer);
+    EXPECT_LT(vmax, 2.0 * std::sqrt(2 * 9.81 * 0.6)) << to_string(transfer);
+  }
+}
+
+TEST(AdaptivePic, PhasesClassifyAndMarkTheBand) {
+  // A pool on a tree: fluid where particles are, the surface row under the air, band marks.
+  PicOptions<2> o;
+  o.fine_level = 5;
+  o.coarse_level = 3;
+  AdaptivePic<2> sim(o);
+  sim.seed(levelset::box<2>({Vec<2>::Zero(), Vec<2>(1.0, 0.5)}));
+  const auto& cls = sim.classification();
+  const auto& g = sim.graph();
+  ASSERT_FALSE(cls.surface.empty());
+  for (CellId c : cls.surface) {
+    EXPECT_TRUE(cls.is_fluid(c));
+    EXPECT_EQ(g.level(c), 5);
+    EXPECT_NEAR(g.box(c).hi[1], 0.5, 1e-12);
+  }
+  for (CellId c : cls.fluid) EXPECT_LT(g.centre(c)[1], 0.5);
+  // The settled tree: the band's marks change nothing more (merges the level jump refuses remain).
+  MarkList marks;
+  pic::mark_band<2>(g, cls, o.band, o.coarse_level, o.fine_level, marks);
+  CellGraph<2> copy = g;
+  const AdaptReport r = copy.adapt(marks);
+  EXPECT_EQ(r.n_split, 0);
+  EXPECT_EQ(r.n_merged, 0);
+  EXPECT_TRUE(marks.split.empty());
+  // Far from the surface, the interior is at the coarse level.
+  EXPECT_EQ(g.level(g.locate(Vec<2>(0.5, 0.1))), 3);
+}
+
+TEST(AdaptivePic, BadOptionsAndFailuresAreReported) {
+  PicOptions<2> o;
+  o.transfer = PicTransfer::apic;  // needs a uniform tree
+  EXPECT_THROW(AdaptivePic<2>{o}, Error);
+  o = {};
+  o.coarse_level = 7;
+  o.fine_level = 5;
+  EXPECT_THROW(AdaptivePic<2>{o}, Error);
+  EXPECT_THROW(parse_pic_transfer("sph"), Error);
+  o = {};
+  o.fine_level = 4;
+  o.coarse_level = 2;
+  o.solver.max_iterations = 1;
+  o.solver.tolerance = 1e-14;
+  o.solver.kind = linalg::SolverKind::bicgstab_jacobi;
+  AdaptivePic<2> sim(o);
+  EXPECT_THROW(sim.advance(0.01), Error);  // not seeded
+  sim.seed(levelset::box<2>({Vec<2>::Zero(), Vec<2>(0.5, 0.5)}));
+  try {
+    sim.advance(0.01);
+    ADD_FAILURE() << "a PPE that cannot converge must stop the run";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("did not converge"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(sim.advance(-1.0), Error);
+}
+
+}  // namespace
+}  // namespace liquid
