@@ -129,7 +129,9 @@ void study(const CaseOptions& options, Table& table, Table& series, Table& phase
     table.add_row({long(Dim), std::string(m.name), o.steps, o.particles, particle_share, o.fluid_cells,
                    cells_share, o.volume_drift, o.height_drift, o.particle_speed, o.face_speed, o.pressure,
                    bound, o.seconds_per_step});
-    std::vector<Table::Cell> row{long(Dim), std::string(m.name)};
+    std::vector<Table::Cell> row;
+    row.emplace_back(long(Dim));
+    row.emplace_back(std::string(m.name));
     for (const char* phase : kPhases) row.push_back(o.timer.seconds(phase) / static_cast<double>(o.steps));
     phases.add_row(std::move(row));
     const std::string key = fmt::format("{}D {}", Dim, m.name);
