@@ -7,19 +7,12 @@
 #include <memory>
 
 #include "liquid/core/error.hpp"
+#include "liquid/core/hash.hpp"
 #include "liquid/core/parallel.hpp"
 
 namespace liquid {
 
 namespace {
-
-/// splitmix64: a well-mixed 64-bit hash, for reproducible jitter.
-std::uint64_t mix(std::uint64_t z) {
-  z += 0x9e3779b97f4a7c15ull;
-  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
-  z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
-  return z ^ (z >> 31);
-}
 
 /// The pattern points of one cell, in physical coordinates.
 template <int Dim>
@@ -31,10 +24,10 @@ void cell_points(const CellGraph<Dim>& graph, CellId c, const std::vector<Vec<Di
   for (std::size_t k = 0; k < pattern.size(); ++k) {
     Vec<Dim> u = pattern[k];
     if (jitter > 0.0) {
-      std::uint64_t h = mix(seed ^ mix(graph.key(c) ^ mix(k)));
+      std::uint64_t h = mix64(seed ^ mix64(graph.key(c) ^ mix64(k)));
       for (int a = 0; a < Dim; ++a) {
-        h = mix(h);
-        const double r = static_cast<double>(h >> 11) * 0x1.0p-53 - 0.5;  // in [-0.5, 0.5)
+        h = mix64(h);
+        const double r = unit_interval(h) - 0.5;  // in [-0.5, 0.5)
         u[a] += jitter * spacing * r;
         if (u[a] < 0.0) u[a] = -u[a];  // reflected back into the cell, not piled up on its side
         if (u[a] >= 1.0) u[a] = 2.0 - u[a];

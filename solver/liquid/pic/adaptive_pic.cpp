@@ -356,52 +356,23 @@ PicStepReport AdaptivePic<Dim>::advance(double dt) {
   PicStepReport r;
   r.step = step_;
   r.dt = dt;
+  const auto phase = [this](const char* name, auto&& body) {
+    const auto t = timer_.scope(name);
+    body();
+  };
   {
     const auto total = timer_.scope("total");
-    {
-      const auto t = timer_.scope("classify");
-      classify();
-    }
-    if (options_.adaptive) {
-      const auto t = timer_.scope("grid");
-      adapt_grid(r);
-    }
-    {
-      const auto t = timer_.scope("p2g");
-      to_faces(r);
-    }
-    {
-      const auto t = timer_.scope("forces");
-      forces(dt);
-    }
-    {
-      const auto t = timer_.scope("laplacian");
-      assemble(dt);
-    }
-    {
-      const auto t = timer_.scope("ppe");
-      solve_pressure(r);
-    }
-    {
-      const auto t = timer_.scope("project");
-      project(dt);
-    }
-    {
-      const auto t = timer_.scope("extrapolate");
-      extrapolate();
-    }
-    {
-      const auto t = timer_.scope("g2p");
-      to_particles(r);
-    }
-    {
-      const auto t = timer_.scope("advect");
-      advect(dt, r);
-    }
-    if (options_.reseed) {
-      const auto t = timer_.scope("reseed");
-      reseed(r);
-    }
+    phase("classify", [&] { classify(); });
+    if (options_.adaptive) phase("grid", [&] { adapt_grid(r); });
+    phase("p2g", [&] { to_faces(r); });
+    phase("forces", [&] { forces(dt); });
+    phase("laplacian", [&] { assemble(dt); });
+    phase("ppe", [&] { solve_pressure(r); });
+    phase("project", [&] { project(dt); });
+    phase("extrapolate", [&] { extrapolate(); });
+    phase("g2p", [&] { to_particles(r); });
+    phase("advect", [&] { advect(dt, r); });
+    if (options_.reseed) phase("reseed", [&] { reseed(r); });
   }
   ++step_;
   time_ += dt;

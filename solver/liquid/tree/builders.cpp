@@ -4,17 +4,11 @@
 #include <cmath>
 
 #include "liquid/core/error.hpp"
+#include "liquid/core/hash.hpp"
 
 namespace liquid::tree {
 
 namespace {
-
-std::uint64_t mix(std::uint64_t x) {
-  x += 0x9e3779b97f4a7c15ULL;
-  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
-  x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
-  return x ^ (x >> 31);
-}
 
 template <int Dim>
 double finest_size(const Box<Dim>& domain, int level) {
@@ -139,14 +133,14 @@ CellGraph<Dim> random(const Box<Dim>& domain, std::uint64_t seed, int min_level,
   LIQUID_VERIFY(split_probability >= 0.0 && split_probability <= 1.0,
                 "tree::random: the split probability must be in [0, 1] (got {})", split_probability);
   options.max_level = std::max(options.max_level, max_level);
-  const std::uint64_t salt = mix(seed);
+  const std::uint64_t salt = mix64(seed);
   return CellGraph<Dim>::build(
       domain,
       [=](const TreeNode<Dim>& n) {
         if (n.level < min_level) return true;
         if (n.level >= max_level) return false;
-        const std::uint64_t h = mix(salt ^ mix(morton::key<Dim>(n.level, n.address)));
-        return static_cast<double>(h >> 11) * 0x1p-53 < split_probability;
+        const std::uint64_t h = mix64(salt ^ mix64(morton::key<Dim>(n.level, n.address)));
+        return unit_interval(h) < split_probability;
       },
       options);
 }
