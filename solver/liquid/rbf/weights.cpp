@@ -194,10 +194,51 @@ Status weights(std::span<const Vec<Dim>> nodes, const Vec<Dim>& at, const Operat
   return bw.status;
 }
 
+template <int Dim>
+Status value_weights(std::span<const Vec<Dim>> nodes, const Vec<Dim>& at, const Config& config,
+                     std::vector<double>& out) {
+  out.clear();
+  Status status;
+  const int n = static_cast<int>(nodes.size());
+  status.n_nodes = n;
+  status.degree_requested = config.degree;
+  double radius = 0.0;
+  for (const auto& x : nodes) radius = std::max(radius, (x - at).norm());
+  if (!std::isfinite(radius) || !at.allFinite()) {
+    status.info = Info::non_finite;
+    return status;
+  }
+  if (n == 0 || radius == 0.0) {
+    status.info = Info::empty_stencil;
+    return status;
+  }
+  thread_local std::vector<Vec<Dim>> z;
+  z.resize(n);
+  for (int j = 0; j < n; ++j) z[j] = (nodes[j] - at) / radius;
+  detail::SaddleSystem<Dim> system(z, config);
+  status = system.status;
+  if (!status.usable()) return status;
+  // One right-hand side: phi(|z_j|) and the basis at the evaluation point (the origin).
+  const int n_terms = system.n_terms;
+  Eigen::VectorXd rhs(n + n_terms);
+  for (int j = 0; j < n; ++j) rhs[j] = system.kernel.value(z[j].norm());
+  const Vec<Dim> origin = Vec<Dim>::Zero();
+  for (int t = 0; t < n_terms; ++t) rhs[n + t] = system.basis.value(t, origin);
+  const Eigen::VectorXd w = system.solve(rhs);
+  if (!w.head(n).allFinite()) {
+    status.info = Info::non_finite;
+    return status;
+  }
+  out.assign(w.data(), w.data() + n);
+  return status;
+}
+
 template struct BasisWeights<2>;
 template struct BasisWeights<3>;
 template BasisWeights<2> basis_weights<2>(std::span<const Vec<2>>, const Vec<2>&, const Config&);
 template BasisWeights<3> basis_weights<3>(std::span<const Vec<3>>, const Vec<3>&, const Config&);
+template Status value_weights<2>(std::span<const Vec<2>>, const Vec<2>&, const Config&, std::vector<double>&);
+template Status value_weights<3>(std::span<const Vec<3>>, const Vec<3>&, const Config&, std::vector<double>&);
 template Status weights<2>(std::span<const Vec<2>>, const Vec<2>&, const Operator<2>&, const Config&,
                            std::vector<double>&);
 template Status weights<3>(std::span<const Vec<3>>, const Vec<3>&, const Operator<3>&, const Config&,

@@ -102,4 +102,10 @@ template <int Dim>
 Status weights(std::span<const Vec<Dim>> nodes, const Vec<Dim>& at, const Operator<Dim>& op,
                const Config& config, std::vector<double>& out);
 
+/// Interpolation weights at `at` alone (the value column of basis_weights, one right-hand side
+/// instead of Dim + 2: what the particle -> face transfer needs per face). Same status rules.
+template <int Dim>
+Status value_weights(std::span<const Vec<Dim>> nodes, const Vec<Dim>& at, const Config& config,
+                     std::vector<double>& out);
+
 }  // namespace liquid::rbf

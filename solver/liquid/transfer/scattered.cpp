@@ -167,7 +167,7 @@ TransferReport particles_to_faces(const CellGraph<Dim>& graph, const Particles<D
         keep_nearest<Dim>(nodes, s.values, at, node_cap);
         int used = 0;
         if (options.scheme == Scheme::rbf) {
-          const rbf::Status st = rbf::weights<Dim>(nodes, at, rbf::Operator<Dim>::identity(), config, s.w);
+          const rbf::Status st = rbf::value_weights<Dim>(nodes, at, config, s.w);
           if (!st.usable()) {
             shepard<Dim>(nodes, at, s.w);
             ++s.report.fallback;

@@ -192,5 +192,23 @@ TEST(RbfFdWeights, ConditionEstimateTracksTheTrueOneAndRefusesNearSingularSystem
   }
 }
 
+TEST(RbfFdWeights, ValueWeightsEqualTheIdentityColumn) {
+  for (int degree : {0, 1, 2, 3}) {
+    const auto nodes = support::jittered_stencil<3>(1, 0.3, 0.25, 5u + degree);
+    const Vec<3> at(0.11, -0.07, 0.2);
+    std::vector<double> a, b;
+    const Config config{5, degree};
+    const Status sa = weights<3>(nodes, at, Operator<3>::identity(), config, a);
+    const Status sb = value_weights<3>(nodes, at, config, b);
+    ASSERT_TRUE(sa.usable() && sb.usable());
+    EXPECT_EQ(sa.degree_used, sb.degree_used);
+    ASSERT_EQ(a.size(), b.size());
+    for (std::size_t j = 0; j < a.size(); ++j) EXPECT_NEAR(a[j], b[j], 1e-12);
+  }
+  std::vector<double> w;
+  EXPECT_EQ(value_weights<2>({}, Vec<2>::Zero(), Config{5, 2}, w).info, Info::empty_stencil);
+  EXPECT_TRUE(w.empty());
+}
+
 }  // namespace
 }  // namespace liquid::rbf
