@@ -54,7 +54,7 @@ CellGraph<Dim> initial_graph(const PicOptions<Dim>& o) {
                 "PIC: coarse level {} must be in [0, fine level {}]", o.coarse_level, o.fine_level);
   LIQUID_VERIFY(o.max_jump >= 1, "PIC: level jump limit {} (need at least 1)", o.max_jump);
   LIQUID_VERIFY(o.band >= 0, "PIC: band {} is negative", o.band);
-  LIQUID_VERIFY(o.adaptive ? o.transfer == PicTransfer::rbf : true,
+  LIQUID_VERIFY(!o.adaptive || o.transfer == PicTransfer::rbf,
                 "PIC: transfer '{}' needs a uniform tree (adaptive = false); adaptive trees use rbf",
                 to_string(o.transfer));
   LIQUID_VERIFY(o.flip >= 0.0 && o.flip <= 1.0, "PIC: FLIP blend {} is outside [0, 1]", o.flip);

@@ -11,6 +11,7 @@
 #include "liquid/rbf/interpolant.hpp"
 #include "liquid/rbf/polynomial.hpp"
 #include "liquid/rbf/weights.hpp"
+#include "liquid/transfer/face_stencil.hpp"
 #include "liquid/transfer/mls.hpp"
 
 namespace liquid {
@@ -109,17 +110,19 @@ void keep_nearest(std::vector<Vec<Dim>>& nodes, std::vector<double>& values, con
   values.swap(v2);
 }
 
+template <int Dim>
 struct Scratch {
   std::vector<CellId> cells, ring;
-  std::vector<std::int32_t> ids;
+  std::vector<Vec<Dim>> nodes;
   std::vector<double> values, w;
+  transfer::FaceStencil<Dim> stencil;
   TransferReport report;
 };
 
 /// The stencil cells of a face: its cells and those within rings - 1 hops of them (plus wall_rings
 /// at a domain-boundary face), sorted.
 template <int Dim>
-void face_cells(const CellGraph<Dim>& graph, FaceId f, const TransferOptions& o, Scratch& s) {
+void face_cells(const CellGraph<Dim>& graph, FaceId f, const TransferOptions& o, Scratch<Dim>& s) {
   const int rings = o.rings + (graph.face(f).is_boundary() ? o.wall_rings : 0);
   s.cells.clear();
   for (CellId c : graph.face(f).cell) {
@@ -133,6 +136,33 @@ void face_cells(const CellGraph<Dim>& graph, FaceId f, const TransferOptions& o,
 
 }  // namespace
 
+namespace transfer {
+
+template <int Dim>
+void gather_face_stencil(const CellGraph<Dim>& graph, CellId c, int rings, std::span<const double> u,
+                         std::span<const std::uint8_t> known, FaceStencil<Dim>& out) {
+  graph.k_ring(c, rings, out.ring);
+  out.faces.clear();
+  for (CellId r : out.ring)
+    for (FaceId f : graph.faces(r))
+      if (known.empty() || known[f]) out.faces.push_back(f);
+  std::sort(out.faces.begin(), out.faces.end());
+  out.faces.erase(std::unique(out.faces.begin(), out.faces.end()), out.faces.end());
+  for (int axis = 0; axis < Dim; ++axis) out.nodes[axis].clear(), out.values[axis].clear();
+  for (FaceId f : out.faces) {
+    const int axis = graph.face(f).axis;
+    out.nodes[axis].push_back(graph.face_centre(f));
+    out.values[axis].push_back(u[f]);
+  }
+}
+
+template void gather_face_stencil<2>(const CellGraph<2>&, CellId, int, std::span<const double>,
+                                     std::span<const std::uint8_t>, FaceStencil<2>&);
+template void gather_face_stencil<3>(const CellGraph<3>&, CellId, int, std::span<const double>,
+                                     std::span<const std::uint8_t>, FaceStencil<3>&);
+
+}  // namespace transfer
+
 template <int Dim>
 TransferReport particles_to_faces(const CellGraph<Dim>& graph, const Particles<Dim>& particles,
                                   const CellBins& bins, const TransferOptions& options, FaceValues& out) {
@@ -145,13 +175,14 @@ TransferReport particles_to_faces(const CellGraph<Dim>& graph, const Particles<D
   const int node_cap = options.node_cap(Dim);
   TransferReport total;
   parallel_for(
-      graph.face_capacity(), [] { return Scratch{}; },
-      [&](Scratch& s, long fl) {
+      graph.face_capacity(), [] { return Scratch<Dim>{}; },
+      [&](Scratch<Dim>& s, long fl) {
         const FaceId f = static_cast<FaceId>(fl);
         if (!graph.face_alive(f)) return;
         const int axis = graph.face(f).axis;
         face_cells(graph, f, options, s);
-        std::vector<Vec<Dim>> nodes;
+        auto& nodes = s.nodes;
+        nodes.clear();
         s.values.clear();
         for (CellId c : s.cells)
           for (std::int32_t p : bins.of(c)) {
@@ -193,7 +224,7 @@ TransferReport particles_to_faces(const CellGraph<Dim>& graph, const Particles<D
         out.known[f] = 1;
         out.weight[f] = static_cast<double>(nodes.size());
       },
-      [&](Scratch& s) { total += s.report; }, 256);
+      [&](Scratch<Dim>& s) { total += s.report; }, 256);
   return total;
 }
 
@@ -216,34 +247,22 @@ TransferReport faces_to_points(const CellGraph<Dim>& graph, std::span<const doub
     if (bins.begin[c + 1] > bins.begin[c]) cells.push_back(c);
   TransferReport total;
   parallel_for(
-      static_cast<long>(cells.size()), [] { return Scratch{}; },
-      [&](Scratch& s, long ci) {
+      static_cast<long>(cells.size()), [] { return Scratch<Dim>{}; },
+      [&](Scratch<Dim>& s, long ci) {
         const CellId c = cells[ci];
-        graph.k_ring(c, options.rings, s.ring);
         const auto pts = bins.of(c);
-        std::vector<FaceId> faces;
-        for (CellId r : s.ring)
-          for (FaceId f : graph.faces(r))
-            if (known.empty() || known[f]) faces.push_back(f);
-        std::sort(faces.begin(), faces.end());
-        faces.erase(std::unique(faces.begin(), faces.end()), faces.end());
-        std::vector<Vec<Dim>> nodes;
+        transfer::gather_face_stencil<Dim>(graph, c, options.rings, u, known, s.stencil);
         for (int axis = 0; axis < Dim; ++axis) {
-          nodes.clear();
-          s.values.clear();
-          for (FaceId f : faces)
-            if (graph.face(f).axis == axis) {
-              nodes.push_back(graph.face_centre(f));
-              s.values.push_back(u[f]);
-            }
+          const std::vector<Vec<Dim>>& nodes = s.stencil.nodes[axis];
+          const std::vector<double>& values = s.stencil.values[axis];
           s.report.targets += static_cast<long>(pts.size());
           if (nodes.empty()) {
             s.report.empty += static_cast<long>(pts.size());
             for (std::int32_t p : pts) v[p][axis] = 0.0;
             continue;
           }
-          const double lo = *std::min_element(s.values.begin(), s.values.end());
-          const double hi = *std::max_element(s.values.begin(), s.values.end());
+          const double lo = *std::min_element(values.begin(), values.end());
+          const double hi = *std::max_element(values.begin(), values.end());
           auto put = [&](std::int32_t p, double value) {
             LIQUID_VERIFY(std::isfinite(value), "faces_to_points: non-finite value at point {} in cell {}", p,
                           c);
@@ -254,8 +273,7 @@ TransferReport faces_to_points(const CellGraph<Dim>& graph, std::span<const doub
             if (interp.status().usable()) {
               if (interp.status().degree_used < options.degree) ++s.report.degree_reduced;
               s.report.max_degree_used = std::max(s.report.max_degree_used, interp.status().degree_used);
-              interp.fit(
-                  Eigen::Map<const Eigen::VectorXd>(s.values.data(), static_cast<long>(s.values.size())));
+              interp.fit(Eigen::Map<const Eigen::VectorXd>(values.data(), static_cast<long>(values.size())));
               for (std::int32_t p : pts) put(p, interp.value_at(x[p]));
               continue;
             }
@@ -263,7 +281,7 @@ TransferReport faces_to_points(const CellGraph<Dim>& graph, std::span<const doub
             for (std::int32_t p : pts) {
               shepard<Dim>(nodes, x[p], s.w);
               double value = 0.0;
-              for (std::size_t i = 0; i < nodes.size(); ++i) value += s.w[i] * s.values[i];
+              for (std::size_t i = 0; i < nodes.size(); ++i) value += s.w[i] * values[i];
               put(p, value);
             }
             continue;
@@ -273,12 +291,12 @@ TransferReport faces_to_points(const CellGraph<Dim>& graph, std::span<const doub
             if (used < options.degree) ++s.report.degree_reduced;
             s.report.max_degree_used = std::max(s.report.max_degree_used, used);
             double value = 0.0;
-            for (std::size_t i = 0; i < nodes.size(); ++i) value += s.w[i] * s.values[i];
+            for (std::size_t i = 0; i < nodes.size(); ++i) value += s.w[i] * values[i];
             put(p, value);
           }
         }
       },
-      [&](Scratch& s) { total += s.report; }, 16);
+      [&](Scratch<Dim>& s) { total += s.report; }, 16);
   return total;
 }
 

@@ -7,6 +7,7 @@
 #include "liquid/core/error.hpp"
 #include "liquid/core/parallel.hpp"
 #include "liquid/rbf/interpolant.hpp"
+#include "liquid/transfer/face_stencil.hpp"
 
 namespace liquid {
 
@@ -61,26 +62,14 @@ FaceVelocityField<Dim>::FaceVelocityField(FaceVelocityField&&) noexcept = defaul
 
 template <int Dim>
 void FaceVelocityField<Dim>::prepare(CellId c, CellInterpolants& out) const {
-  std::vector<CellId> ring;
-  graph_->k_ring(c, options_.rings, ring);
-  std::vector<FaceId> faces;
-  for (CellId r : ring)
-    for (FaceId f : graph_->faces(r))
-      if (known_.empty() || known_[f]) faces.push_back(f);
-  std::sort(faces.begin(), faces.end());
-  faces.erase(std::unique(faces.begin(), faces.end()), faces.end());
+  transfer::FaceStencil<Dim> stencil;
+  transfer::gather_face_stencil<Dim>(*graph_, c, options_.rings, u_, known_, stencil);
   const rbf::Config config{options_.exponent, options_.degree};
-  std::vector<Vec<Dim>> nodes;
   for (int axis = 0; axis < Dim; ++axis) {
-    nodes.clear();
-    Eigen::VectorXd values(static_cast<long>(faces.size()));
-    long n = 0;
-    for (FaceId f : faces)
-      if (graph_->face(f).axis == axis) {
-        nodes.push_back(graph_->face_centre(f));
-        values[n++] = u_[f];
-      }
-    values.conservativeResize(n);
+    const auto& nodes = stencil.nodes[axis];
+    const Eigen::Map<const Eigen::VectorXd> values(stencil.values[axis].data(),
+                                                   static_cast<long>(stencil.values[axis].size()));
+    const long n = values.size();
     out.empty[axis] = n == 0;
     if (n == 0) continue;
     out.lo[axis] = values.minCoeff();
@@ -88,7 +77,7 @@ void FaceVelocityField<Dim>::prepare(CellId c, CellInterpolants& out) const {
     out.fallback[axis] = values.mean();
     rbf::Interpolant<Dim> interp(nodes, config);
     if (!interp.status().usable()) continue;
-    interp.fit(values);
+    interp.fit(Eigen::MatrixXd(values));
     out.interp[axis].emplace(std::move(interp));
   }
 }
