@@ -231,6 +231,20 @@ TYPED_TEST(ParticlesTest, ReseedingBringsEveryFluidCellIntoRange) {
   EXPECT_EQ(occupied_after, occupied);  // empty (non-fluid) cells stay empty
   for (int i = static_cast<int>(before - r.deleted); i < p.size(); ++i) EXPECT_EQ(p.v[i], 2.0 * p.x[i]);
   EXPECT_EQ(reseed<Dim>(g, cells, ReseedOptions{}, source, p, bins).cells, 0);  // idempotent
+  // Empty cells are left alone unless the caller says they are fluid (fill_empty).
+  std::vector<CellId> empty;
+  g.for_each_cell([&](CellId c) {
+    if (bins.count(c) == 0) empty.push_back(c);
+  });
+  ASSERT_FALSE(empty.empty());
+  EXPECT_EQ(reseed<Dim>(g, empty, ReseedOptions{}, source, p, bins).created, 0);
+  ReseedOptions fill;
+  fill.fill_empty = true;
+  const ReseedReport filled = reseed<Dim>(g, empty, fill, source, p, bins);
+  EXPECT_EQ(filled.cells, static_cast<long>(empty.size()));
+  EXPECT_EQ(filled.created, static_cast<long>(empty.size()) * (1 << Dim));
+  for (CellId c : empty) EXPECT_EQ(bins.count(c), 1 << Dim);
+  expect_bins_match_location<Dim>(g, p.x, bins);
   ReseedOptions bad;
   bad.lo = 10, bad.hi = 5;
   EXPECT_THROW(reseed<Dim>(g, cells, bad, source, p, bins), Error);

@@ -6,6 +6,7 @@
 
 #include "liquid/core/error.hpp"
 #include "liquid/pic/adaptive_pic.hpp"
+#include "liquid/tree/builders.hpp"
 
 namespace liquid {
 namespace {
@@ -87,6 +88,51 @@ TEST(AdaptivePic, PhasesClassifyAndMarkTheBand) {
   EXPECT_TRUE(marks.split.empty());
   // Far from the surface, the interior is at the coarse level.
   EXPECT_EQ(g.level(g.locate(Vec<2>(0.5, 0.1))), 3);
+}
+
+TEST(AdaptivePic, EnclosedEmptyCellsAreFluidAndOpenOnesAir) {
+  // An 8 x 8 grid with one particle per cell in the lower half, except two cells: one enclosed
+  // by fluid (a hole: fluid), one on the surface row with air above (air).
+  const auto g = tree::uniform<2>(Box<2>{}, 3);
+  const CellId hole = g.locate(Vec<2>(0.44, 0.19)), notch = g.locate(Vec<2>(0.69, 0.44));
+  std::vector<Vec<2>> x;
+  g.for_each_cell([&](CellId c) {
+    if (g.centre(c)[1] < 0.5 && c != hole && c != notch) x.push_back(g.centre(c));
+  });
+  CellBins bins;
+  bin_particles<2>(g, x, bins);
+  pic::Classification cls;
+  pic::classify_cells<2>(g, bins, cls);
+  EXPECT_TRUE(cls.is_fluid(hole));
+  EXPECT_EQ(cls.filled, std::vector<CellId>{hole});
+  EXPECT_FALSE(cls.is_fluid(notch));
+  EXPECT_EQ(static_cast<long>(cls.fluid.size()), 31);
+  // Surface: the top fluid row (7 cells; the notch is air) and the cell below the notch.
+  for (CellId c : cls.surface) EXPECT_TRUE(cls.is_fluid(c));
+  EXPECT_EQ(static_cast<long>(cls.surface.size()), 8);
+}
+
+TEST(AdaptivePic, RunawaySpeedsAndNonFiniteStatesStopTheRun) {
+  PicOptions<2> o;
+  o.fine_level = 4;
+  o.coarse_level = 2;
+  o.advect_cfl = 1e-4;  // any motion needs far more than 64 substeps
+  AdaptivePic<2> sim(o);
+  sim.seed(levelset::box<2>({Vec<2>::Zero(), Vec<2>(0.5, 0.5)}));
+  try {
+    sim.advance(0.01);
+    ADD_FAILURE() << "more than 64 substeps must stop the run";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("substeps"), std::string::npos) << e.what();
+  }
+  AdaptivePic<2> nan_run(PicOptions<2>{});
+  try {
+    nan_run.seed(levelset::box<2>({Vec<2>::Zero(), Vec<2>(0.5, 0.5)}),
+                 [](const Vec<2>&) { return Vec<2>(std::nan(""), 0.0); });
+    ADD_FAILURE() << "a NaN velocity must be caught where it appears";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("phase seed"), std::string::npos) << e.what();
+  }
 }
 
 TEST(AdaptivePic, BadOptionsAndFailuresAreReported) {

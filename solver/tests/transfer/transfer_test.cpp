@@ -351,6 +351,35 @@ TYPED_TEST(TransferTest, AdvectionThroughFaceVelocitiesIsExactForLinearFields) {
   EXPECT_THROW(rbf_field(Vec<Dim>::Constant(std::nan(""))), Error);
 }
 
+TYPED_TEST(TransferTest, NodeLimitKeepsTheNearestParticlesAndStaysExactForLinearFields) {
+  constexpr int Dim = TypeParam::value;
+  TransferOptions o = TransferOptions::paper_rbf();
+  EXPECT_EQ(o.node_cap(Dim), 4 * (Dim == 2 ? 6 : 10));  // 4 x the degree-2 terms
+  o.max_nodes = -1;
+  EXPECT_EQ(o.node_cap(Dim), 0);
+  // 30 particles per cell: every face's two cells hold more than any limit below.
+  const auto g = random_tree<Dim>(71, 2);
+  Particles<Dim> p;
+  SeedOptions so;
+  so.per_cell = 30;
+  so.jitter = 0.5;
+  seed_region<Dim>(
+      g, [](const Vec<Dim>&) { return -1.0; }, so, p);
+  for (int i = 0; i < p.size(); ++i) p.v[i] = linear_field<Dim>(p.x[i]);
+  CellBins bins;
+  bin_particles<Dim>(g, p.x, bins);
+  for (int cap : {12, 0, -1}) {
+    o.max_nodes = cap;
+    FaceValues faces;
+    particles_to_faces<Dim>(g, p, bins, o, faces);
+    double worst = 0.0;
+    g.for_each_face([&](FaceId f) {
+      worst = std::max(worst, std::abs(faces.value[f] - linear_field<Dim>(g.face_centre(f))[g.face(f).axis]));
+    });
+    EXPECT_LT(worst, 1e-9) << "max_nodes " << cap;
+  }
+}
+
 TEST(Transfer, FlipKeepsWhatTheGridDidNotChangeAndPicForgetsIt) {
   // Particles with sub-grid detail on a grid whose velocity changes by a constant: FLIP (alpha 1)
   // adds the change to each particle's own velocity; PIC (alpha 0) replaces it by the grid's.
