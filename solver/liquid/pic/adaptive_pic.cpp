@@ -262,7 +262,7 @@ void AdaptivePic<Dim>::project(double dt) {
       known_[f] = 1;
       return;
     }
-    const bool wet = cls_.is_fluid(g.cell[0]) || cls_.is_fluid(g.cell[1]);
+    const bool wet = cls_.wet(g);
     known_[f] = wet;
     if (wet) u_[f] -= dt * dn[f];
   });

@@ -24,6 +24,10 @@ struct Classification {
   std::vector<CellId> surface;  ///< surface cells (fluid with a non-fluid face neighbour), ascending
   std::vector<CellId> filled;   ///< empty cells classified fluid (holes), ascending
   bool is_fluid(CellId c) const { return type[c] == CellType::fluid; }
+  /// True when a face has a fluid cell on either side: the faces the projection sets.
+  bool wet(const GraphFace& g) const {
+    return (g.cell[0] != no_cell && is_fluid(g.cell[0])) || (g.cell[1] != no_cell && is_fluid(g.cell[1]));
+  }
 };
 
 /// Classifies every cell from the particle bins.

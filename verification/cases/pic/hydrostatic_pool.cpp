@@ -91,10 +91,7 @@ Outcome run_pool(const Method& m, bool full, Table& series) {
     const auto& g = sim.graph();
     const auto u = sim.face_velocity();
     g.for_each_face([&](FaceId f) {
-      const GraphFace& gf = g.face(f);
-      const bool wet = (gf.cell[0] != no_cell && sim.classification().is_fluid(gf.cell[0])) ||
-                       (gf.cell[1] != no_cell && sim.classification().is_fluid(gf.cell[1]));
-      if (wet) vf = std::max(vf, std::abs(u[f]));
+      if (sim.classification().wet(g.face(f))) vf = std::max(vf, std::abs(u[f]));
     });
     out.particle_speed = std::max(out.particle_speed, vp / v_ref);
     out.face_speed = std::max(out.face_speed, vf / v_ref);
