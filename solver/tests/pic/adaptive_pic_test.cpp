@@ -145,6 +145,13 @@ TEST(AdaptivePic, BadOptionsAndFailuresAreReported) {
   o.fine_level = 5;
   EXPECT_THROW(AdaptivePic<2>{o}, Error);
   EXPECT_THROW(parse_pic_transfer("sph"), Error);
+  for (auto bad : {+[](PicOptions<2>& b) { b.band = -1; }, +[](PicOptions<2>& b) { b.max_jump = 0; },
+                   +[](PicOptions<2>& b) { b.flip = 1.5; }, +[](PicOptions<2>& b) { b.flip = std::nan(""); },
+                   +[](PicOptions<2>& b) { b.fine_level = 40; }}) {
+    PicOptions<2> b;
+    bad(b);
+    EXPECT_THROW(AdaptivePic<2>{b}, Error);
+  }
   o = {};
   o.fine_level = 4;
   o.coarse_level = 2;

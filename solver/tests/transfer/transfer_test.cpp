@@ -423,6 +423,12 @@ TEST(Transfer, BadOptionsAndSizesAreRefused) {
   o = {};
   o.exponent = 4;
   EXPECT_THROW(particles_to_faces<2>(g, p, bins, o, f), Error);
+  o = {};
+  o.wall_rings = 3;
+  EXPECT_THROW(particles_to_faces<2>(g, p, bins, o, f), Error);
+  o = {};
+  o.rings = 0;
+  EXPECT_THROW(particles_to_faces<2>(g, p, bins, o, f), Error);
   std::vector<double> u(3, 0.0);
   std::vector<Vec<2>> v(1);
   EXPECT_THROW(faces_to_points<2>(g, u, {}, p.x, bins, TransferOptions{}, v), Error);
