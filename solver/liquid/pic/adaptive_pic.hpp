@@ -5,10 +5,10 @@
 // class runs on a uniform tree with the regular PIC/FLIP/APIC transfers: the paper's baselines.
 //
 // advance(dt) reads as the phases of ARCHITECTURE.md, each timed under its name:
-//   classify -> grid -> p2g -> forces -> laplacian -> ppe -> project -> extrapolate -> g2p ->
+//   [sources] -> classify -> grid -> p2g -> forces -> laplacian -> ppe -> project -> extrapolate -> g2p ->
 //   advect -> reseed
-// Density is 1 (pressure in units of velocity^2). Walls are the domain's sides, free-slip: the
-// normal velocity is zero there and dp/dn = 0. The divergence is the finite-volume flux sum (it
+// Density is 1 (pressure in units of velocity^2). Walls are the domain's sides and the static
+// solids, free-slip: the normal velocity is zero there. The divergence is the finite-volume flux sum (it
 // conserves: mac/divergence.hpp); the Laplacian is mac's (FD where regular, RBF-FD at T-junctions).
 //
 //   PicOptions<2> o;  o.domain = ...;  o.coarse_level = 3;  o.fine_level = 6;
@@ -17,12 +17,14 @@
 //   while (sim.time() < 2.0) sim.advance(sim.stable_dt(1.0, 0.01));
 
 #include <functional>
+#include <limits>
 #include <memory>
 #include <span>
 #include <string>
 #include <vector>
 
 #include "liquid/core/timer.hpp"
+#include "liquid/levelset/levelset.hpp"
 #include "liquid/linalg/solver.hpp"
 #include "liquid/mac/laplacian.hpp"
 #include "liquid/mac/poisson.hpp"
@@ -43,6 +45,16 @@ const char* to_string(PicTransfer transfer);
 /// "rbf", "pic", "flip", "apic"; throws naming the choices.
 PicTransfer parse_pic_transfer(const std::string& name);
 
+/// An inflow: while start <= t < stop, every non-solid cell whose centre is inside `region` is
+/// filled with particles and the particles inside it move at `velocity`.
+template <int Dim>
+struct PicSource {
+  levelset::Function<Dim> region;  ///< < 0 inside
+  Vec<Dim> velocity = Vec<Dim>::Zero();
+  double start = 0.0, stop = std::numeric_limits<double>::infinity();
+  bool active(double t) const { return t >= start && t < stop; }
+};
+
 template <int Dim>
 struct PicOptions {
   Box<Dim> domain{Vec<Dim>::Zero(), Vec<Dim>::Ones()};
@@ -52,6 +64,11 @@ struct PicOptions {
   int band = 2;          ///< cells within this many face hops of a surface cell are at fine_level
   int max_jump = 2;      ///< level jump limit between face neighbours (1-4, or unlimited_jump)
   Vec<Dim> gravity = default_gravity();
+  /// Static obstacles (< 0 inside; empty: none). A cell whose centre is inside is solid: its faces
+  /// keep velocity 0 (free slip), the PPE rows of its fluid neighbours take dp/dn = 0 there, and
+  /// particles that enter it are pushed back out.
+  levelset::Function<Dim> solid;
+  std::vector<PicSource<Dim>> sources;
   PicTransfer transfer = PicTransfer::rbf;
   double flip = 0.95;  ///< FLIP's blend for transfer = flip (1: pure FLIP, 0: PIC)
   TransferOptions rbf = stable_rbf();
@@ -99,12 +116,29 @@ struct PicStepReport {
   long n_particles = 0, n_cells = 0, n_fluid_cells = 0, n_surface_cells = 0;
   long n_split = 0, n_merged = 0;  ///< grid changes
   long n_filled = 0;               ///< particles created in holes and in new children of interior cells
+  long n_source = 0;               ///< particles created by the sources
   int n_substeps = 1;
   linalg::SolveStats ppe;
   TransferReport p2g, g2p;
   long unknown_faces = 0;  ///< faces no particle reached, before extrapolation
   AdvectReport advect;
   ReseedReport reseed;
+};
+
+/// Everything that decides the solver's future: what a checkpoint stores. Positions and velocities
+/// are Dim doubles per particle; fields as the particles hold them.
+template <int Dim>
+struct PicState {
+  CellGraphState<Dim> graph;
+  std::vector<double> x, v;
+  std::vector<std::string> field_names;
+  std::vector<int> field_components;
+  std::vector<std::vector<double>> field_values;
+  std::vector<CellId> particle_cell;  ///< the bins
+  std::vector<double> u, p;           ///< face velocities and cell pressures by id
+  std::vector<std::uint8_t> known;
+  double time = 0.0;
+  long step = 0;
 };
 
 template <int Dim>
@@ -122,6 +156,11 @@ class AdaptivePic {
   /// when a field becomes NaN or infinite, and when the PPE does not converge (unless the options
   /// say to go on; the report then says so).
   PicStepReport advance(double dt);
+  /// The state after the last step, and back: a solver built with the same options and given
+  /// restore(state()) (instead of seed()) takes the same steps bit for bit. Throws naming the
+  /// mismatch when the state does not fit the options (a field the transfer needs, array sizes).
+  PicState<Dim> state() const;
+  void restore(const PicState<Dim>& state);
   /// cfl * finest h / (largest particle speed), at most max_dt.
   double stable_dt(double cfl, double max_dt) const;
 
@@ -142,6 +181,9 @@ class AdaptivePic {
 
  private:
   void classify();
+  void apply_sources(PicStepReport& r);
+  void fold_solid_rows();
+  void extend_into_solid(linalg::Vector& x) const;
   void adapt_grid(PicStepReport& r);
   void fill(std::span<const CellId> cells, PicStepReport& r);
   void to_faces(PicStepReport& r);
@@ -163,6 +205,7 @@ class AdaptivePic {
   Particles<Dim> particles_;
   CellBins bins_;
   pic::Classification cls_;
+  std::vector<std::uint8_t> solid_;  // per cell id: centre inside the solid (empty: no solid)
   std::vector<double> u_, u_transferred_, p_;
   std::vector<std::uint8_t> known_;
   mac::PoissonSystem<Dim> system_;

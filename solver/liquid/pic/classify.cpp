@@ -8,21 +8,27 @@
 namespace liquid::pic {
 
 template <int Dim>
-void classify_cells(const CellGraph<Dim>& graph, const CellBins& bins, Classification& out) {
+void classify_cells(const CellGraph<Dim>& graph, const CellBins& bins, std::span<const std::uint8_t> solid,
+                    Classification& out) {
   const int cap = graph.cell_capacity();
+  LIQUID_VERIFY(solid.empty() || solid.size() >= static_cast<std::size_t>(cap),
+                "classify_cells: solid mask has {} entries for {} cell ids", solid.size(), cap);
   out.type.assign(cap, CellType::air);
   out.fluid.clear(), out.surface.clear(), out.filled.clear();
   graph.for_each_cell([&](CellId c) {
-    if (bins.count(c) > 0) out.type[c] = CellType::fluid;
+    if (!solid.empty() && solid[c])
+      out.type[c] = CellType::solid;
+    else if (bins.count(c) > 0)
+      out.type[c] = CellType::fluid;
   });
-  // Holes: empty cells surrounded by fluid (or walls).
+  // Holes: empty cells surrounded by fluid (or walls, or solid).
   graph.for_each_cell([&](CellId c) {
-    if (out.type[c] == CellType::fluid) return;
+    if (out.type[c] != CellType::air) return;
     bool enclosed = true;
     for (FaceId f : graph.faces(c)) {
       const GraphFace& g = graph.face(f);
       const CellId n = g.cell[0] == c ? g.cell[1] : g.cell[0];
-      if (n != no_cell && bins.count(n) == 0) {
+      if (n != no_cell && out.type[n] == CellType::air) {
         enclosed = false;
         break;
       }
@@ -36,7 +42,7 @@ void classify_cells(const CellGraph<Dim>& graph, const CellBins& bins, Classific
     for (FaceId f : graph.faces(c)) {
       const GraphFace& g = graph.face(f);
       const CellId n = g.cell[0] == c ? g.cell[1] : g.cell[0];
-      if (n != no_cell && out.type[n] != CellType::fluid) {
+      if (n != no_cell && out.type[n] == CellType::air) {
         out.surface.push_back(c);
         break;
       }
@@ -45,15 +51,16 @@ void classify_cells(const CellGraph<Dim>& graph, const CellBins& bins, Classific
 }
 
 template <int Dim>
-void mark_band(const CellGraph<Dim>& graph, const Classification& cls, int band, int coarse_level,
+void mark_band(const CellGraph<Dim>& graph, std::span<const CellId> centres, int band, int coarse_level,
                int fine_level, MarkList& marks) {
   LIQUID_VERIFY(band >= 0 && coarse_level >= 0 && coarse_level <= fine_level,
                 "mark_band: band {} and levels {} <= {} are not valid", band, coarse_level, fine_level);
   marks.clear();
   // Breadth first from the surface, `band` hops deep.
   std::vector<std::uint8_t> near(graph.cell_capacity(), 0);
-  std::vector<CellId> frontier(cls.surface.begin(), cls.surface.end()), next;
-  for (CellId c : frontier) near[c] = 1;
+  std::vector<CellId> frontier, next;
+  for (CellId c : centres)
+    if (!near[c]) near[c] = 1, frontier.push_back(c);
   for (int hop = 0; hop < band && !frontier.empty(); ++hop) {
     next.clear();
     for (CellId c : frontier)
@@ -76,9 +83,11 @@ void mark_band(const CellGraph<Dim>& graph, const Classification& cls, int band,
   });
 }
 
-template void classify_cells<2>(const CellGraph<2>&, const CellBins&, Classification&);
-template void classify_cells<3>(const CellGraph<3>&, const CellBins&, Classification&);
-template void mark_band<2>(const CellGraph<2>&, const Classification&, int, int, int, MarkList&);
-template void mark_band<3>(const CellGraph<3>&, const Classification&, int, int, int, MarkList&);
+template void classify_cells<2>(const CellGraph<2>&, const CellBins&, std::span<const std::uint8_t>,
+                                Classification&);
+template void classify_cells<3>(const CellGraph<3>&, const CellBins&, std::span<const std::uint8_t>,
+                                Classification&);
+template void mark_band<2>(const CellGraph<2>&, std::span<const CellId>, int, int, int, MarkList&);
+template void mark_band<3>(const CellGraph<3>&, std::span<const CellId>, int, int, int, MarkList&);
 
 }  // namespace liquid::pic

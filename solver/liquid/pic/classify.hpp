@@ -2,10 +2,11 @@
 // Cell classification and the narrow band of the adaptive PIC step (paper Secs. 4 and 5.2), as
 // functions over plain arrays indexed by cell id.
 //
-// A fluid cell holds particles. An empty cell whose face neighbours are all fluid (walls count as
-// fluid) is fluid too: a hole that a step of advection opened inside the liquid or against a wall
-// is refilled by reseeding, never turned into an air bubble. A surface cell is a fluid cell with a
-// non-fluid cell among its face neighbours.
+// A solid cell has its centre inside an obstacle (the caller's mask). A fluid cell is not solid and
+// holds particles. An empty cell whose face neighbours are all fluid (walls and solid cells count
+// as fluid) is fluid too: a hole that a step of advection opened inside the liquid or against a
+// wall is refilled by reseeding, never turned into an air bubble. A surface cell is a fluid cell
+// with an air cell among its face neighbours.
 
 #include <cstdint>
 #include <span>
@@ -16,7 +17,7 @@
 
 namespace liquid::pic {
 
-enum class CellType : std::uint8_t { air = 0, fluid = 1 };
+enum class CellType : std::uint8_t { air = 0, fluid = 1, solid = 2 };
 
 struct Classification {
   std::vector<CellType> type;   ///< per cell id
@@ -24,20 +25,31 @@ struct Classification {
   std::vector<CellId> surface;  ///< surface cells (fluid with a non-fluid face neighbour), ascending
   std::vector<CellId> filled;   ///< empty cells classified fluid (holes), ascending
   bool is_fluid(CellId c) const { return type[c] == CellType::fluid; }
-  /// True when a face has a fluid cell on either side: the faces the projection sets.
+  bool is_solid(CellId c) const { return type[c] == CellType::solid; }
+  /// True when a face has a fluid cell on one side and no solid cell on either: the faces the
+  /// projection sets (faces of solid cells keep the solid's velocity).
   bool wet(const GraphFace& g) const {
-    return (g.cell[0] != no_cell && is_fluid(g.cell[0])) || (g.cell[1] != no_cell && is_fluid(g.cell[1]));
+    const auto is = [&](int s, CellType t) { return g.cell[s] != no_cell && type[g.cell[s]] == t; };
+    return (is(0, CellType::fluid) || is(1, CellType::fluid)) && !is(0, CellType::solid) &&
+           !is(1, CellType::solid);
+  }
+  /// True when a face touches a solid cell.
+  bool solid_face(const GraphFace& g) const {
+    return (g.cell[0] != no_cell && is_solid(g.cell[0])) || (g.cell[1] != no_cell && is_solid(g.cell[1]));
   }
 };
 
-/// Classifies every cell from the particle bins.
+/// Classifies every cell from the particle bins; `solid` (per cell id, or empty for no solid) marks
+/// the solid cells.
 template <int Dim>
-void classify_cells(const CellGraph<Dim>& graph, const CellBins& bins, Classification& out);
+void classify_cells(const CellGraph<Dim>& graph, const CellBins& bins, std::span<const std::uint8_t> solid,
+                    Classification& out);
 
-/// Narrow-band marks: cells within `band` face hops of a surface cell go to fine_level, the others
-/// to coarse_level (split when coarser than their target, merge when finer). `marks` is cleared first.
+/// Narrow-band marks: cells within `band` face hops of a cell of `centres` (the surface cells, and
+/// any other cell the caller wants fine) go to fine_level, the others to coarse_level (split when
+/// coarser than their target, merge when finer). `marks` is cleared first.
 template <int Dim>
-void mark_band(const CellGraph<Dim>& graph, const Classification& cls, int band, int coarse_level,
+void mark_band(const CellGraph<Dim>& graph, std::span<const CellId> centres, int band, int coarse_level,
                int fine_level, MarkList& marks);
 
 }  // namespace liquid::pic

@@ -139,6 +139,21 @@ struct AdaptReport {
   bool empty() const { return new_cells.empty() && removed_cells.empty(); }
 };
 
+/// Everything that decides a graph's future, its ids and free lists included: what a checkpoint
+/// stores so that a restored graph evolves bit for bit like the original. Plain arrays by id.
+template <int Dim>
+struct CellGraphState {
+  static constexpr int face_record = 8;  ///< ints per face in `faces`
+  Box<Dim> domain;
+  CellGraphOptions<Dim> options;
+  std::vector<std::int32_t> level;    ///< per cell id; -1 for a dead id
+  std::vector<std::int64_t> address;  ///< Dim per cell id
+  /// Per face id: cell[0], cell[1], side_level[0], side_level[1], axis, boundary, slot[0], slot[1].
+  std::vector<std::int32_t> faces;
+  std::vector<std::uint8_t> face_alive;
+  std::vector<std::int32_t> free_cells, free_faces;  ///< in the order they will be reused (from the back)
+};
+
 /// The outcome of CellGraph::check_invariants().
 struct InvariantReport {
   std::vector<std::string> failures;  ///< one sentence each (the first few hundred)
@@ -164,6 +179,11 @@ class CellGraph {
   /// balancing after them. Evaluates `refine` from several threads at once.
   static CellGraph build(const Box<Dim>& domain, const Predicate& refine,
                          const CellGraphOptions<Dim>& options = {});
+
+  /// The graph as plain arrays (see CellGraphState), and back. from_state() checks the arrays'
+  /// sizes and every invariant, and throws liquid::Error naming the first problem.
+  CellGraphState<Dim> state() const;
+  static CellGraph from_state(const CellGraphState<Dim>& state);
 
   // ---- sizes and settings
   const Box<Dim>& domain() const { return domain_; }

@@ -66,6 +66,9 @@ class NodeIndex {
     map_.set(key, b);
   }
 
+  /// Sets the entry of existing node `key` (its parent is interior) to leaf `cell`.
+  void set_leaf(std::uint64_t key, std::int32_t cell) { *entry_ptr(key) = cell; }
+
   /// Turns interior `key`, whose children are all leaves, into leaf `cell`.
   void merge(std::uint64_t key, std::int32_t cell) {
     const std::int32_t b = map_.find(key);

@@ -81,7 +81,7 @@ TEST(AdaptivePic, PhasesClassifyAndMarkTheBand) {
   for (CellId c : cls.fluid) EXPECT_LT(g.centre(c)[1], 0.5);
   // The settled tree: the band's marks change nothing more (merges the level jump refuses remain).
   MarkList marks;
-  pic::mark_band<2>(g, cls, o.band, o.coarse_level, o.fine_level, marks);
+  pic::mark_band<2>(g, cls.surface, o.band, o.coarse_level, o.fine_level, marks);
   CellGraph<2> copy = g;
   const AdaptReport r = copy.adapt(marks);
   EXPECT_EQ(r.n_split, 0);
@@ -103,7 +103,7 @@ TEST(AdaptivePic, EnclosedEmptyCellsAreFluidAndOpenOnesAir) {
   CellBins bins;
   bin_particles<2>(g, x, bins);
   pic::Classification cls;
-  pic::classify_cells<2>(g, bins, cls);
+  pic::classify_cells<2>(g, bins, {}, cls);
   EXPECT_TRUE(cls.is_fluid(hole));
   EXPECT_EQ(cls.filled, std::vector<CellId>{hole});
   EXPECT_FALSE(cls.is_fluid(notch));
@@ -168,6 +168,112 @@ TEST(AdaptivePic, BadOptionsAndFailuresAreReported) {
     EXPECT_NE(std::string(e.what()).find("did not converge"), std::string::npos) << e.what();
   }
   EXPECT_THROW(sim.advance(-1.0), Error);
+}
+
+}  // namespace
+}  // namespace liquid
+
+namespace liquid {
+namespace {
+
+TEST(AdaptivePic, StillPoolAroundASubmergedObstacleStaysStill) {
+  // A box obstacle inside a pool: the PPE rows beside it take no flux through its faces, so the
+  // hydrostatic pressure holds around it and nothing moves; no particle is ever inside it.
+  const Box<2> obstacle{Vec<2>(0.375, 0.125), Vec<2>(0.625, 0.3125)};
+  for (auto [adaptive, transfer] : {std::pair{true, PicTransfer::rbf}, std::pair{false, PicTransfer::apic}}) {
+    PicOptions<2> o;
+    o.adaptive = adaptive;
+    o.transfer = transfer;
+    o.fine_level = 5;
+    o.coarse_level = 3;
+    o.solid = levelset::box<2>(obstacle);
+    AdaptivePic<2> sim(o);
+    sim.seed(levelset::box<2>({Vec<2>::Zero(), Vec<2>(1.0, 0.5)}));
+    for (int s = 0; s < 10; ++s) ASSERT_TRUE(sim.advance(0.01).ppe.converged());
+    double vmax = 0.0;
+    for (const auto& v : sim.particles().v) vmax = std::max(vmax, v.norm());
+    EXPECT_LT(vmax, 1e-2 * std::sqrt(9.81 * 0.5)) << to_string(transfer);
+    for (const auto& x : sim.particles().x) EXPECT_GE(o.solid(x), -1e-9) << x.transpose();
+    long solid_cells = 0;
+    sim.graph().for_each_cell([&](CellId c) { solid_cells += sim.classification().is_solid(c); });
+    EXPECT_GT(solid_cells, 0);
+  }
+}
+
+TEST(AdaptivePic, ColumnFallingOnAnObstacleStaysOutOfIt) {
+  PicOptions<2> o;
+  o.fine_level = 5;
+  o.coarse_level = 2;
+  o.solid = levelset::sphere<2>(Vec<2>(0.5, 0.25), 0.15);
+  AdaptivePic<2> sim(o);
+  sim.seed(levelset::box<2>({Vec<2>(0.35, 0.5), Vec<2>(0.65, 0.9)}));
+  long pushed = 0;
+  while (sim.time() < 0.3) pushed += sim.advance(sim.stable_dt(1.0, 0.01)).advect.pushed;
+  EXPECT_GT(pushed, 0);  // the liquid reached the obstacle
+  for (const auto& x : sim.particles().x) EXPECT_GE(o.solid(x), -1e-9) << x.transpose();
+}
+
+TEST(AdaptivePic, SourceAddsLiquidOnlyWhileActive) {
+  PicOptions<2> o;
+  o.fine_level = 5;
+  o.coarse_level = 2;
+  PicSource<2> s;
+  s.region = levelset::box<2>({Vec<2>(0.05, 0.6), Vec<2>(0.2, 0.75)});
+  s.velocity = Vec<2>(1.0, 0.0);
+  s.start = 0.0;
+  s.stop = 0.05;
+  o.sources.push_back(s);
+  AdaptivePic<2> sim(o);
+  sim.seed(levelset::box<2>({Vec<2>::Zero(), Vec<2>(1.0, 0.1)}));
+  const int before = sim.particles().size();
+  long created = 0;
+  while (sim.time() < 0.05 - 1e-12) created += sim.advance(0.01).n_source;
+  EXPECT_GT(created, 0);
+  EXPECT_GT(sim.particles().size(), before);
+  long later = 0;
+  for (int k = 0; k < 3; ++k) later += sim.advance(0.01).n_source;
+  EXPECT_EQ(later, 0);
+}
+
+template <int Dim>
+void expect_identical(const Particles<Dim>& a, const Particles<Dim>& b) {
+  ASSERT_EQ(a.size(), b.size());
+  for (int i = 0; i < a.size(); ++i) {
+    ASSERT_EQ(a.x[i], b.x[i]) << "particle " << i;  // bit for bit: the point of a restore
+    ASSERT_EQ(a.v[i], b.v[i]) << "particle " << i;
+  }
+}
+
+TEST(AdaptivePic, RestoredSolverTakesTheSameStepsBitForBit) {
+  for (auto [adaptive, transfer] : {std::pair{true, PicTransfer::rbf}, std::pair{false, PicTransfer::apic}}) {
+    PicOptions<2> o;
+    o.adaptive = adaptive;
+    o.transfer = transfer;
+    o.fine_level = 5;
+    o.coarse_level = 2;
+    o.solid = levelset::box<2>({Vec<2>(0.6, 0.0), Vec<2>(0.7, 0.2)});
+    AdaptivePic<2> sim(o);
+    sim.seed(levelset::box<2>({Vec<2>::Zero(), Vec<2>(0.4, 0.6)}));
+    for (int s = 0; s < 4; ++s) sim.advance(sim.stable_dt(1.0, 0.01));
+    const PicState<2> saved = sim.state();
+    AdaptivePic<2> resumed(o);
+    resumed.restore(saved);
+    EXPECT_EQ(resumed.step(), sim.step());
+    for (int s = 0; s < 4; ++s) {
+      const double dt = sim.stable_dt(1.0, 0.01);
+      ASSERT_EQ(dt, resumed.stable_dt(1.0, 0.01));
+      sim.advance(dt);
+      resumed.advance(dt);
+    }
+    expect_identical(sim.particles(), resumed.particles());
+    EXPECT_EQ(sim.graph().n_cells(), resumed.graph().n_cells());
+    EXPECT_TRUE(std::equal(sim.pressure().begin(), sim.pressure().end(), resumed.pressure().begin()));
+    // A state that does not fit is refused with the reason.
+    PicOptions<2> other = o;
+    other.fine_level = 6;
+    AdaptivePic<2> wrong(other);
+    EXPECT_THROW(wrong.restore(saved), Error);
+  }
 }
 
 }  // namespace

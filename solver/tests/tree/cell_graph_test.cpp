@@ -322,3 +322,86 @@ TYPED_TEST(CellGraphTest, KRingMatchesBruteForceAdjacency) {
 
 }  // namespace
 }  // namespace liquid
+
+namespace liquid {
+namespace {
+
+template <int Dim>
+void expect_same_state(const CellGraphState<Dim>& a, const CellGraphState<Dim>& b) {
+  EXPECT_EQ(a.level, b.level);
+  EXPECT_EQ(a.address, b.address);
+  EXPECT_EQ(a.faces, b.faces);
+  EXPECT_EQ(a.face_alive, b.face_alive);
+  EXPECT_EQ(a.free_cells, b.free_cells);
+  EXPECT_EQ(a.free_faces, b.free_faces);
+}
+
+template <class D>
+class CellGraphStateTest : public ::testing::Test {};
+using StateDims = ::testing::Types<std::integral_constant<int, 2>, std::integral_constant<int, 3>>;
+TYPED_TEST_SUITE(CellGraphStateTest, StateDims);
+
+// A graph restored from its state has the same ids, face lists, free lists and tree index: the
+// same changes made to both afterwards leave them identical, ids included.
+TYPED_TEST(CellGraphStateTest, RestoredGraphEvolvesLikeTheOriginal) {
+  constexpr int Dim = TypeParam::value;
+  const Box<Dim> domain = test_domain<Dim>();
+  CellGraph<Dim> g =
+      tree::narrow_band<Dim>(domain, levelset::sphere<Dim>(Vec<Dim>::Zero(), 0.6), 1, Dim == 2 ? 5 : 3, 1.5);
+  std::mt19937 rng(7);
+  const auto random_marks = [&](const CellGraph<Dim>& graph) {
+    MarkList m;
+    std::uniform_int_distribution<int> pick(0, 9);
+    graph.for_each_cell([&](CellId c) {
+      const int r = pick(rng);
+      if (r == 0) m.split.push_back(c);
+      if (r >= 6) m.merge.push_back(c);
+    });
+    return m;
+  };
+  for (int round = 0; round < 3; ++round) {  // ids recycled, free lists non-empty
+    MarkList m = random_marks(g);
+    g.adapt(m);
+  }
+  ASSERT_FALSE(g.state().free_cells.empty());
+  CellGraph<Dim> h = CellGraph<Dim>::from_state(g.state());
+  expect_ok(h);
+  expect_same_state(g.state(), h.state());
+  EXPECT_EQ(g.n_cells(), h.n_cells());
+  EXPECT_EQ(g.deepest_level(), h.deepest_level());
+  for (int round = 0; round < 3; ++round) {
+    MarkList m = random_marks(g), m2 = m;
+    const AdaptReport ra = g.adapt(m), rb = h.adapt(m2);
+    EXPECT_EQ(ra.new_cells, rb.new_cells);
+    EXPECT_EQ(ra.new_faces, rb.new_faces);
+    expect_same_state(g.state(), h.state());
+  }
+  const Vec<Dim> x = Vec<Dim>::Constant(0.3);
+  EXPECT_EQ(g.locate(x), h.locate(x));
+}
+
+TYPED_TEST(CellGraphStateTest, BrokenStateIsRefusedWithTheProblemNamed) {
+  constexpr int Dim = TypeParam::value;
+  const CellGraph<Dim> g = tree::uniform<Dim>(test_domain<Dim>(), 2);
+  CellGraphState<Dim> s = g.state();
+  s.address.pop_back();
+  EXPECT_THROW(
+      {
+        try {
+          CellGraph<Dim>::from_state(s);
+        } catch (const Error& e) {
+          EXPECT_NE(std::string(e.what()).find("addresses"), std::string::npos) << e.what();
+          throw;
+        }
+      },
+      Error);
+  s = g.state();
+  s.faces[CellGraphState<Dim>::face_record * 5] = 9999;  // a face naming a cell that does not exist
+  EXPECT_THROW(CellGraph<Dim>::from_state(s), Error);
+  s = g.state();
+  s.level[3] = 1;  // a cell at the wrong level: the faces no longer tile
+  EXPECT_THROW(CellGraph<Dim>::from_state(s), Error);
+}
+
+}  // namespace
+}  // namespace liquid
