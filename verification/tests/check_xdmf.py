@@ -9,6 +9,13 @@ HDF DataItem
 its NumberType and Precision; a Topology's NumberOfElements equals its item's first dimension; and
 every cell-centred Attribute has one value per element. Exit status 0 when all hold, 1 otherwise,
 with one line per problem naming the file and the dataset; 2 when h5dump cannot be run at all.
+
+Grids may be embedded in collections (a time series: a Temporal collection of Spatial ones); each
+Uniform grid is checked as above, and besides: the grids of one collection have distinct Names;
+every grid of a Temporal collection has a <Time Value> and the times increase; a Geometry of type
+XY (XYZ) has 2 (3) columns; a Polyvertex topology has one node per element; every node-centred
+Attribute has one value per geometry point; a Scalar attribute has one component and a Vector
+attribute as many as the geometry has coordinates.
 """
 import os
 import re
@@ -62,6 +69,39 @@ def dataset_shape_and_type(header):
     return [int(x) for x in space.group(1).split(",")], dtype.group(1)
 
 
+GEOMETRY_COLUMNS = {"XY": 2, "XYZ": 3}
+
+
+def is_collection(grid):
+    return grid.get("GridType") == "Collection" or grid.find("Grid") is not None
+
+
+def check_collection(grid, where):
+    """The collection-level checks: distinct Names; increasing Times in a Temporal collection."""
+    problems = []
+    children = grid.findall("Grid")
+    names = [child.get("Name") for child in children]
+    for name in sorted({n for n in names if n is not None and names.count(n) > 1}):
+        problems.append(f"{where}: {names.count(name)} grids named '{name}' in collection '{grid.get('Name')}'")
+    if grid.get("CollectionType") == "Temporal":
+        previous = None
+        for k, child in enumerate(children):
+            time = child.find("Time")
+            try:
+                value = float(time.get("Value")) if time is not None else None
+            except (TypeError, ValueError):
+                value = None
+            if value is None:
+                problems.append(f"{where}: grid {k} ('{child.get('Name')}') of the Temporal collection has no "
+                                f"<Time Value> number")
+                continue
+            if previous is not None and not value > previous:
+                problems.append(f"{where}: time {value} of grid {k} ('{child.get('Name')}') does not follow "
+                                f"time {previous} (times must increase)")
+            previous = value
+    return problems
+
+
 def check(xmf_path):
     problems = []
     folder = os.path.dirname(os.path.abspath(xmf_path))
@@ -74,10 +114,24 @@ def check(xmf_path):
     read_whole = set()
     n_items = 0
     for grid in root.iter("Grid"):
+        if is_collection(grid):
+            problems += check_collection(grid, xmf_path)
+            continue
         n_elements = None
         topology = grid.find("Topology")
         if topology is not None and topology.get("NumberOfElements"):
             n_elements = int(topology.get("NumberOfElements"))
+        if topology is not None and topology.get("TopologyType") == "Polyvertex" \
+                and topology.get("NodesPerElement", "1") != "1":
+            problems.append(f"{xmf_path}: Polyvertex topology of grid '{grid.get('Name')}' has NodesPerElement "
+                            f"{topology.get('NodesPerElement')}, not 1")
+        geometry = grid.find("Geometry")
+        n_columns = GEOMETRY_COLUMNS.get(geometry.get("GeometryType")) if geometry is not None else None
+        n_points = None
+        if geometry is not None:
+            item = geometry.find("DataItem")
+            if item is not None and item.get("Dimensions"):
+                n_points = int(item.get("Dimensions").split()[0])
         for parent in grid:
             for item in parent.iter("DataItem"):
                 if item.get("Format") != "HDF":
@@ -109,9 +163,22 @@ def check(xmf_path):
                     problems.append(f"{where}: type {dtype} in the HDF5 file, {key[0]} {key[1]} in the XDMF")
                 if parent.tag == "Topology" and n_elements is not None and shape[0] != n_elements:
                     problems.append(f"{where}: {shape[0]} rows for NumberOfElements {n_elements}")
+                if parent.tag == "Geometry" and n_columns is not None and shape[-1] != n_columns:
+                    problems.append(f"{where}: {shape[-1]} columns for GeometryType {parent.get('GeometryType')}")
                 if parent.tag == "Attribute" and parent.get("Center") == "Cell" and n_elements is not None \
                         and shape[0] != n_elements:
                     problems.append(f"{where}: {shape[0]} values for {n_elements} cells")
+                if parent.tag == "Attribute" and parent.get("Center") == "Node" and n_points is not None \
+                        and shape[0] != n_points:
+                    problems.append(f"{where}: {shape[0]} values for {n_points} points")
+                if parent.tag == "Attribute":
+                    kind = parent.get("AttributeType", "Scalar")
+                    n_components = 1 if len(shape) == 1 else shape[-1]
+                    if kind == "Scalar" and n_components != 1:
+                        problems.append(f"{where}: a Scalar attribute with {n_components} components")
+                    if kind == "Vector" and n_columns is not None and (len(shape) != 2 or n_components != n_columns):
+                        problems.append(f"{where}: a Vector attribute of shape {shape} on a geometry of "
+                                        f"{n_columns} coordinates")
     if n_items == 0:
         problems.append(f"{xmf_path}: no HDF DataItem")
     return problems

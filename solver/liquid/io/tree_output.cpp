@@ -3,66 +3,28 @@
 #include <fmt/format.h>
 #include <hdf5.h>
 
-#include <cctype>
-#include <cstdio>
 #include <filesystem>
-#include <fstream>
+#include <utility>
 
 #include "liquid/core/error.hpp"
+#include "liquid/io/hdf5_detail.hpp"
 
 namespace liquid::io {
 
 namespace {
 
-/// Silences HDF5's own error printing while alive (our checks report failures), then restores it.
-class QuietHdf5 {
- public:
-  QuietHdf5() {
-    H5Eget_auto2(H5E_DEFAULT, &func_, &data_);
-    H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
-  }
-  ~QuietHdf5() { H5Eset_auto2(H5E_DEFAULT, func_, data_); }
-  QuietHdf5(const QuietHdf5&) = delete;
-  QuietHdf5& operator=(const QuietHdf5&) = delete;
+using detail::Handle;
+using detail::QuietHdf5;
 
- private:
-  H5E_auto2_t func_ = nullptr;
-  void* data_ = nullptr;
-};
-
-/// Closes an HDF5 handle on scope exit.
-class Handle {
- public:
-  Handle(hid_t id, herr_t (*close)(hid_t)) : id_(id), close_(close) {}
-  ~Handle() {
-    if (id_ >= 0) close_(id_);
-  }
-  Handle(const Handle&) = delete;
-  Handle& operator=(const Handle&) = delete;
-  hid_t get() const { return id_; }
-  bool ok() const { return id_ >= 0; }
-
- private:
-  hid_t id_;
-  herr_t (*close_)(hid_t);
-};
+constexpr const char* who = "write_tree";
 
 void write_dataset(hid_t where, const std::string& name, hid_t mem_type, hid_t file_type,
                    std::vector<hsize_t> dims, const void* data, const std::string& path) {
-  Handle space(H5Screate_simple(static_cast<int>(dims.size()), dims.data(), nullptr), H5Sclose);
-  LIQUID_VERIFY(space.ok(), "write_tree: cannot make the dataspace of {} in {}", name, path);
-  Handle set(H5Dcreate2(where, name.c_str(), file_type, space.get(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT),
-             H5Dclose);
-  LIQUID_VERIFY(set.ok(), "write_tree: cannot create dataset {} in {}", name, path);
-  LIQUID_VERIFY(H5Dwrite(set.get(), mem_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data) >= 0,
-                "write_tree: cannot write dataset {} in {}", name, path);
+  detail::write_dataset(where, name, mem_type, file_type, std::move(dims), data, path, who);
 }
 
 bool valid_name(const std::string& name) {
-  if (name.empty() || name == "level" || name == "cell_id") return false;
-  for (char ch : name)
-    if (!(std::isalnum(static_cast<unsigned char>(ch)) || ch == '_' || ch == '-' || ch == '.')) return false;
-  return true;
+  return detail::valid_field_name(name) && name != "level" && name != "cell_id";
 }
 
 /// Corner k of a cell in XDMF/VTK order, as offsets (0 or 1) per axis.
@@ -71,11 +33,6 @@ int corner_bit(int k, int d) {
   static constexpr int quad[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
   if (d < 2) return quad[k % 4][d];
   return k / 4;
-}
-
-std::string data_item(const std::string& dims, const char* type, int precision, const std::string& ref) {
-  return fmt::format(R"(<DataItem Dimensions="{}" NumberType="{}" Precision="{}" Format="HDF">{}</DataItem>)",
-                     dims, type, precision, ref);
 }
 
 }  // namespace
@@ -94,7 +51,7 @@ TreeFiles write_tree(const std::string& stem, const CellGraph<Dim>& graph,
                   "write_tree: field '{}' has {} values but the graph's cell ids go up to {}", f.name,
                   f.values.size(), graph.cell_capacity() - 1);
   }
-  const TreeFiles files{stem + ".h5", stem + ".xmf"};
+  TreeFiles files{stem + ".h5", stem + ".xmf", ""};
   const std::vector<CellId> ids = graph.cell_ids();
   const auto n = static_cast<hsize_t>(ids.size());
 
@@ -139,40 +96,28 @@ TreeFiles write_tree(const std::string& stem, const CellGraph<Dim>& graph,
 
   const std::string h5_name = std::filesystem::path(files.h5).filename().string();
   const std::string cells = std::to_string(n);
-  std::string xmf;
-  xmf +=
-      "<?xml version=\"1.0\" ?>\n<!DOCTYPE Xdmf SYSTEM \"Xdmf.dtd\" []>\n<Xdmf Version=\"3.0\">\n  "
-      "<Domain>\n";
-  xmf += fmt::format("    <Grid Name=\"cellgraph{}d\" GridType=\"Uniform\">\n", Dim);
-  xmf += fmt::format(
-      "      <Topology TopologyType=\"{}\" NumberOfElements=\"{}\">\n        {}\n      </Topology>\n",
+  std::string& grid = files.grid;
+  grid += fmt::format("<Grid Name=\"cellgraph{}d\" GridType=\"Uniform\">\n", Dim);
+  grid += fmt::format(
+      "  <Topology TopologyType=\"{}\" NumberOfElements=\"{}\">\n    {}\n  </Topology>\n",
       Dim == 2 ? "Quadrilateral" : "Hexahedron", cells,
-      data_item(fmt::format("{} {}", cells, n_corners), "Int", 8, h5_name + ":/topology"));
-  xmf += fmt::format("      <Geometry GeometryType=\"{}\">\n        {}\n      </Geometry>\n",
-                     Dim == 2 ? "XY" : "XYZ",
-                     data_item(fmt::format("{} {}", n * n_corners, Dim), "Float", 8, h5_name + ":/geometry"));
+      detail::data_item(fmt::format("{} {}", cells, n_corners), "Int", 8, h5_name + ":/topology"));
+  grid += fmt::format(
+      "  <Geometry GeometryType=\"{}\">\n    {}\n  </Geometry>\n", Dim == 2 ? "XY" : "XYZ",
+      detail::data_item(fmt::format("{} {}", n * n_corners, Dim), "Float", 8, h5_name + ":/geometry"));
   const auto attribute = [&](const std::string& name, const char* type, int precision,
                              const std::string& path) {
-    xmf += fmt::format(
-        "      <Attribute Name=\"{}\" AttributeType=\"Scalar\" Center=\"Cell\">\n        {}\n      "
-        "</Attribute>\n",
-        name, data_item(cells, type, precision, h5_name + ":" + path));
+    grid += fmt::format(
+        "  <Attribute Name=\"{}\" AttributeType=\"Scalar\" Center=\"Cell\">\n    {}\n  </Attribute>\n", name,
+        detail::data_item(cells, type, precision, h5_name + ":" + path));
   };
   attribute("level", "Int", 4, "/level");
   attribute("cell_id", "Int", 4, "/cell_id");
   for (const CellField& f : fields) attribute(f.name, "Float", 8, "/fields/" + f.name);
-  xmf += "    </Grid>\n  </Domain>\n</Xdmf>\n";
-  {
-    std::ofstream out(xmf_tmp, std::ios::trunc);
-    out << xmf;
-    out.close();
-    LIQUID_VERIFY(out.good(), "write_tree: cannot write {}", xmf_tmp);
-  }
-  std::error_code ec;
-  std::filesystem::rename(h5_tmp, files.h5, ec);
-  LIQUID_VERIFY(!ec, "write_tree: cannot rename {} to {}: {}", h5_tmp, files.h5, ec.message());
-  std::filesystem::rename(xmf_tmp, files.xmf, ec);
-  LIQUID_VERIFY(!ec, "write_tree: cannot rename {} to {}: {}", xmf_tmp, files.xmf, ec.message());
+  grid += "</Grid>";
+  detail::write_text(xmf_tmp, detail::xdmf_document(grid), who);
+  detail::rename_file(h5_tmp, files.h5, who);
+  detail::rename_file(xmf_tmp, files.xmf, who);
   return files;
 }
 

@@ -27,9 +27,13 @@ struct CellField {
   std::span<const double> values;
 };
 
-/// Paths written by write_tree().
+/// What write_tree() wrote: the two paths, and the XDMF <Grid>...</Grid> element of STEM.xmf (one
+/// Uniform grid named "cellgraph2d" or "cellgraph3d"). The grid's DataItems name the HDF5 file by
+/// its file name only, so the text can be embedded in another XDMF file of the same folder (a
+/// SeriesWriter frame).
 struct TreeFiles {
   std::string h5, xmf;
+  std::string grid;
 };
 
 /// Writes STEM.h5 and STEM.xmf for `graph` with `fields`. `stem` is a path without extension;

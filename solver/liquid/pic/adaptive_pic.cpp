@@ -260,12 +260,15 @@ void AdaptivePic<Dim>::fill(std::span<const CellId> cells, PicStepReport& r) {
 template <int Dim>
 void AdaptivePic<Dim>::adapt_grid(PicStepReport& r) {
   MarkList marks;
-  // Active sources are kept fine like the surface: the liquid they create starts in the band.
+  // Active sources are kept fine like the surface: the liquid they create starts in the band. A
+  // cell counts when the source may overlap it (level set within half its diagonal of the centre),
+  // so that a source smaller than the coarse air cells around it is found and refined down to.
   std::vector<CellId> centres = cls_.surface;
   for (const PicSource<Dim>& s : options_.sources)
     if (s.active(time_))
       graph_.for_each_cell([&](CellId c) {
-        if (s.region(graph_.centre(c)) < 0.0 && !cls_.is_solid(c)) centres.push_back(c);
+        if (s.region(graph_.centre(c)) < 0.5 * graph_.cell_size(c).norm() && !cls_.is_solid(c))
+          centres.push_back(c);
       });
   // So is the liquid's contact with a solid, two hops wider than the band: no RBF-FD row then
   // reaches a solid cell, where fold_solid_rows() is only first order. Measured on a still pool

@@ -26,6 +26,11 @@ std::vector<hsize_t> dataset_dims(hid_t file, const std::string& path) {
   return dims;
 }
 
+/// `text` without the spaces that start its lines (the file indents the grid it embeds).
+std::string without_indent(const std::string& text) {
+  return std::regex_replace(text, std::regex("(^|\n) +"), "$1");
+}
+
 template <typename T>
 class TreeOutputTest : public ::testing::Test {};
 using Dims = ::testing::Types<std::integral_constant<int, 2>, std::integral_constant<int, 3>>;
@@ -62,6 +67,11 @@ TYPED_TEST(TreeOutputTest, XdmfReferencesMatchTheHdf5Datasets) {
   EXPECT_NE(xmf.find(Dim == 2 ? "TopologyType=\"Quadrilateral\"" : "TopologyType=\"Hexahedron\""),
             std::string::npos);
   EXPECT_NE(xmf.find("NumberOfElements=\"" + std::to_string(g.n_cells()) + "\""), std::string::npos);
+  // The returned grid is the file's one Grid element, naming the HDF5 file by its name alone.
+  EXPECT_EQ(files.grid.rfind("<Grid Name=\"cellgraph" + std::to_string(Dim) + "d\"", 0), 0u) << files.grid;
+  EXPECT_EQ(files.grid.substr(files.grid.size() - 7), "</Grid>");
+  EXPECT_NE(without_indent(xmf).find(without_indent(files.grid)), std::string::npos);
+  EXPECT_EQ(files.grid.find(dir.string()), std::string::npos);
 
   const hid_t file = H5Fopen(files.h5.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
   ASSERT_GE(file, 0);

@@ -1,0 +1,292 @@
+// liquid: runs a scene of the adaptive PIC solver and prints the paper's Table 1 row for it.
+//
+//   liquid scenes                                   the built-in scenes, one line each
+//   liquid run dam-break-2d --out out/             a built-in scene (or a path to a .toml file)
+//   liquid run drop-3d --finest 6 --method apic     overrides: levels, method, end
+//   liquid run --resume out/drop-3d_checkpoint_000040.h5 --out out/
+//
+// Exit status: 0 done; 1 the run failed while stepping (a NaN, a PPE that did not converge: the
+// message names the step, phase and place; files written before stay); 2 bad input (a scene file,
+// an option); 3 an internal error.
+#include <fmt/format.h>
+#include <omp.h>
+#include <unistd.h>
+#include <CLI/CLI.hpp>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+
+#include "liquid/core/error.hpp"
+#include "liquid/scene/runner.hpp"
+
+namespace {
+
+using namespace liquid;
+
+struct Args {
+  std::string scene, out, json, resume;
+  SceneOverrides overrides;
+  long checkpoint_every = 0;
+  bool regular = false, adaptive = false, no_frames = false, quiet = false;
+};
+
+/// The run stopped while stepping (exit 1), as opposed to bad input (exit 2).
+struct RunFailure {
+  std::string message;
+};
+
+template <int Dim>
+void echo(const Scene<Dim>& s, const RunSettings& settings, bool resumed) {
+  const PicOptions<Dim>& o = s.pic;
+  fmt::print("liquid run: scene {} ({}D) from {}{}\n", s.name, Dim, s.path, resumed ? " (resumed)" : "");
+  if (!s.description.empty()) fmt::print("  {}\n", s.description);
+  fmt::print("  domain      [{}] to [{}]\n", fmt::join(o.domain.lo.data(), o.domain.lo.data() + Dim, ", "),
+             fmt::join(o.domain.hi.data(), o.domain.hi.data() + Dim, ", "));
+  fmt::print("  grid        {}; finest level {} (h = {:.4g}), coarse {}, band {}, level jump {}\n",
+             o.adaptive ? "adaptive tree" : "regular grid", o.fine_level,
+             std::ldexp(o.domain.size().minCoeff(), -o.fine_level),
+             o.adaptive ? o.coarse_level : o.fine_level, o.band,
+             o.max_jump >= unlimited_jump ? std::string("unlimited") : std::to_string(o.max_jump));
+  fmt::print("  method      {}{}; {}; reseeding {}\n", to_string(o.transfer),
+             o.transfer == PicTransfer::flip ? fmt::format(" (blend {})", o.flip) : "",
+             o.integrator == Integrator::rk2 ? "RK2" : "RK3", o.reseed ? "on" : "off");
+  fmt::print("  ppe         {} to {:.1e}{}\n", linalg::to_string(o.solver.kind), o.solver.tolerance,
+             o.continue_on_ppe_failure ? ", going on when it does not converge" : "");
+  fmt::print("  gravity     ({}); solids {}; sources {}\n",
+             fmt::join(o.gravity.data(), o.gravity.data() + Dim, ", "), o.solid ? "yes" : "none",
+             o.sources.size());
+  if (s.time.steps >= 0)
+    fmt::print("  time        {} steps", s.time.steps);
+  else
+    fmt::print("  time        to t = {} s", s.time.end);
+  fmt::print(", CFL {}, dt in [{:.2g}, {:.2g}] s\n", s.time.cfl, s.time.dt_min, s.time.dt_max);
+  if (settings.out.empty())
+    fmt::print("  output      none (no --out)\n");
+  else
+    fmt::print("  output      {}: {}{}\n", settings.out,
+               settings.frames ? (s.output.every > 0 ? fmt::format("a frame every {} s", s.output.every)
+                                                     : std::string("first and last frame"))
+                               : std::string("no frames"),
+               settings.checkpoint_every > 0
+                   ? fmt::format(", a checkpoint every {} steps", settings.checkpoint_every)
+                   : "");
+  fmt::print("  threads     {}\n", omp_get_max_threads());
+  std::fflush(stdout);
+}
+
+/// One line of progress: a bar on a terminal (rewritten in place), plain lines otherwise.
+class Progress {
+ public:
+  explicit Progress(bool quiet) : tty_(isatty(fileno(stdout)) != 0), quiet_(quiet) {}
+  template <int Dim>
+  void update(const SceneRunner<Dim>& run, bool last) {
+    if (quiet_) return;
+    const Scene<Dim>& s = run.scene();
+    const AdaptivePic<Dim>& sim = run.solver();
+    const double f =
+        s.time.steps >= 0 ? static_cast<double>(sim.step()) / s.time.steps : sim.time() / s.time.end;
+    const PicStepReport& r = run.last();
+    const auto& phases = sim.timer().entries();
+    const auto total = phases.find("total");
+    const double per_step =
+        total != phases.end() && total->second.calls > 0 ? total->second.seconds / total->second.calls : 0.0;
+    const std::string text =
+        fmt::format("t = {:.4f} s  step {}  particles {}  cells {} ({} fluid)  {:.3f} s/step", sim.time(),
+                    sim.step(), r.n_particles, r.n_cells, r.n_fluid_cells, per_step);
+    if (tty_) {
+      const int width = 24, filled = static_cast<int>(std::round(std::clamp(f, 0.0, 1.0) * width));
+      fmt::print("\r[{}{}] {:3.0f}%  {}\033[K", std::string(filled, '#'), std::string(width - filled, '.'),
+                 100 * std::clamp(f, 0.0, 1.0), text);
+      if (last) fmt::print("\n");
+    } else {
+      const int decile = static_cast<int>(std::floor(std::clamp(f, 0.0, 1.0) * 10));
+      if (decile > printed_ || last) {
+        printed_ = decile;
+        fmt::print("  {:3.0f}%  {}\n", 100 * std::clamp(f, 0.0, 1.0), text);
+      }
+    }
+    std::fflush(stdout);
+  }
+
+ private:
+  bool tty_, quiet_;
+  int printed_ = -1;
+};
+
+/// The paper's Table 1 row (RBF Liquids, Sec. 6) and every phase.
+void print_summary(const RunSummary& s, const std::string& name, int dim) {
+  const auto pct = [](double a, double b) { return b > 0 ? 100.0 * a / b : 0.0; };
+  const auto sec = [&](const char* phase) {
+    const auto it = s.seconds.find(phase);
+    return it == s.seconds.end() ? 0.0 : it->second;
+  };
+  fmt::print("\nTable 1 row ({}, {}D, {} steps to t = {:.4g} s, {} threads)\n", name, dim, s.steps, s.time,
+             s.threads);
+  fmt::print("  {:>12} {:>8} {:>12} {:>8} {:>9} {:>9} {:>11} {:>10} {:>9}\n", "fluid cells", "% reg",
+             "particles", "% reg", "grid s", "ppe s", "laplacian s", "transfer s", "total s");
+  fmt::print("  {:>12.0f} {:>7.1f}% {:>12.0f} {:>7.1f}% {:>9.4f} {:>9.4f} {:>11.4f} {:>10.4f} {:>9.4f}\n",
+             s.fluid_cells, pct(s.fluid_cells, s.regular_cells), s.particles,
+             pct(s.particles, s.regular_particles), sec("grid"), sec("ppe"), sec("laplacian"),
+             sec("p2g") + sec("g2p"), sec("total"));
+  fmt::print(
+      "  regular grid at the same finest h, for the same liquid: {:.0f} fluid cells, {:.0f} particles\n",
+      s.regular_cells, s.regular_particles);
+  fmt::print(
+      "  (computed from this run's fluid cells and its finest cells' particle density; a regular run\n"
+      "   gives the measured figures: liquid run SCENE --method apic, or ci/bench-scenes)\n");
+  fmt::print("  seconds per step by phase:");
+  for (const auto& [phase, t] : s.seconds) fmt::print(" {} {:.4f}", phase, t);
+  fmt::print("\n  PPE: {} iterations in all ({:.1f} per step){}\n", s.ppe_iterations,
+             static_cast<double>(s.ppe_iterations) / std::max<long>(1, s.steps),
+             s.ppe_failures ? fmt::format(", {} steps did not converge", s.ppe_failures) : "");
+  fmt::print("  wall time {:.2f} s\n", s.wall);
+}
+
+void write_json(const std::string& path, const RunSummary& s, const std::string& name, int dim) {
+  std::string phases;
+  for (const auto& [phase, t] : s.seconds)
+    phases += fmt::format("{}\"{}\": {:.6g}", phases.empty() ? "" : ", ", phase, t);
+  const std::string text = fmt::format(
+      "{{\n  \"scene\": \"{}\", \"dimension\": {}, \"steps\": {}, \"time\": {:.9g}, \"threads\": {},\n"
+      "  \"fluid_cells\": {:.6g}, \"cells\": {:.6g}, \"particles\": {:.6g},\n"
+      "  \"regular_cells\": {:.6g}, \"regular_particles\": {:.6g},\n"
+      "  \"ppe_iterations\": {}, \"ppe_failures\": {}, \"wall_seconds\": {:.6g},\n"
+      "  \"seconds_per_step\": {{{}}}\n}}\n",
+      name, dim, s.steps, s.time, s.threads, s.fluid_cells, s.cells, s.particles, s.regular_cells,
+      s.regular_particles, s.ppe_iterations, s.ppe_failures, s.wall, phases);
+  const std::string tmp = path + ".tmp";
+  {
+    std::ofstream out(tmp, std::ios::trunc);
+    out << text;
+    out.close();
+    LIQUID_VERIFY(out.good(), "cannot write {}", tmp);
+  }
+  LIQUID_VERIFY(std::rename(tmp.c_str(), path.c_str()) == 0, "cannot rename {} to {}", tmp, path);
+}
+
+template <int Dim>
+int run_scene(const Args& a, const std::string& scene_path) {
+  RunSettings settings;
+  settings.out = a.out;
+  settings.frames = !a.no_frames;
+  settings.checkpoint_every = a.checkpoint_every;
+  settings.overrides = a.overrides;
+  settings.scene_path = scene_path;
+  std::unique_ptr<SceneRunner<Dim>> run;
+  if (!a.resume.empty()) {
+    run = std::make_unique<SceneRunner<Dim>>(SceneRunner<Dim>::resume(a.resume, settings));
+  } else {
+    Scene<Dim> scene = load_scene<Dim>(scene_path);
+    apply_overrides<Dim>(a.overrides, scene);
+    settings.scene_path = scene_path;
+    echo<Dim>(scene, settings, false);
+    try {
+      run = std::make_unique<SceneRunner<Dim>>(std::move(scene), settings);
+    } catch (const Error& e) {
+      throw RunFailure{fmt::format("seeding failed: {}", e.what())};
+    }
+  }
+  if (!a.resume.empty()) {
+    echo<Dim>(run->scene(), settings, true);
+    fmt::print("  continuing from step {} (t = {:.6g} s)\n", run->solver().step(), run->solver().time());
+  }
+  Progress progress(a.quiet);
+  while (!run->done()) {
+    try {
+      run->step();
+    } catch (const Error& e) {
+      throw RunFailure{
+          fmt::format("{}{}", e.what(),
+                      a.out.empty() ? "" : fmt::format(" (files written so far in {} are complete)", a.out))};
+    }
+    progress.update<Dim>(*run, run->done());
+  }
+  const RunSummary s = run->summary();
+  print_summary(s, run->scene().name, Dim);
+  if (!a.json.empty()) write_json(a.json, s, run->scene().name, Dim);
+  if (!a.out.empty()) fmt::print("  frames: {} in {}/{}.xmf\n", run->n_frames(), a.out, run->scene().name);
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"liquid: the adaptive RBF liquid solver and its regular PIC/FLIP/APIC baselines"};
+  app.require_subcommand(1);
+  auto* scenes = app.add_subcommand("scenes", "list the built-in scenes");
+  Args a;
+  auto* run = app.add_subcommand("run", "run a scene (a built-in name or a .toml file)");
+  run->add_option("scene", a.scene, "built-in scene name or path to a scene file");
+  run->add_option("--out", a.out, "folder for frames (HDF5 + XDMF) and checkpoints");
+  auto* steps =
+      run->add_option("--steps", a.overrides.steps, "run this many steps (instead of the scene's end)")
+          ->check(CLI::PositiveNumber);
+  run->add_option("--until", a.overrides.until, "run to this time in seconds (instead of the scene's end)")
+      ->check(CLI::PositiveNumber)
+      ->excludes(steps);
+  run->add_option("--method", a.overrides.method,
+                  "rbf, pic, flip or apic (pic, flip, apic run on a regular grid)")
+      ->check(CLI::IsMember({"rbf", "pic", "flip", "apic"}));
+  auto* regular = run->add_flag("--regular", a.regular, "run on a regular grid at the finest level");
+  run->add_flag("--adaptive", a.adaptive, "run on the adaptive tree (rbf only)")->excludes(regular);
+  run->add_option("--finest", a.overrides.finest, "finest level (the coarse level moves with it)")
+      ->check(CLI::Range(1, 20));
+  run->add_option("--json", a.json, "write the summary (Table 1 row, phases) as JSON to FILE");
+  run->add_option("--checkpoint-every", a.checkpoint_every, "write a checkpoint every N steps (needs --out)")
+      ->check(CLI::PositiveNumber);
+  run->add_option("--resume", a.resume, "continue the run saved in this checkpoint")
+      ->check(CLI::ExistingFile);
+  run->add_flag("--no-frames", a.no_frames, "write no frames (checkpoints still)");
+  run->add_flag("--quiet", a.quiet, "no progress lines");
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    const int code = app.exit(e);
+    return code == 0 ? 0 : 2;
+  }
+
+  try {
+    if (*scenes) {
+      for (const auto& [name, description] : builtin_scenes()) fmt::print("{:<26} {}\n", name, description);
+      return 0;
+    }
+    if (a.regular) a.overrides.adaptive = 0;
+    if (a.adaptive) a.overrides.adaptive = 1;
+    LIQUID_VERIFY(!a.scene.empty() || !a.resume.empty(),
+                  "liquid run: give a scene (liquid scenes lists them) or --resume FILE");
+    LIQUID_VERIFY(a.scene.empty() || a.resume.empty(),
+                  "liquid run: give a scene or --resume, not both (a checkpoint names its scene)");
+    if (!a.resume.empty())
+      LIQUID_VERIFY(
+          a.overrides.method.empty() && a.overrides.adaptive < 0 && a.overrides.finest < 0 &&
+              a.overrides.steps < 0 && a.overrides.until < 0,
+          "liquid run --resume continues the saved run as it was: --method, --regular, --adaptive, --finest, "
+          "--steps and --until are refused with it");
+    LIQUID_VERIFY(a.checkpoint_every == 0 || !a.out.empty(),
+                  "liquid run: --checkpoint-every needs an output folder (--out DIR)");
+    int dim = 0;
+    std::string path;
+    if (a.resume.empty()) {
+      path = find_scene(a.scene);
+      dim = scene_dimension(path);
+    } else {
+      dim = static_cast<int>(checkpoint_dimension(a.resume));
+    }
+    return dim == 2 ? run_scene<2>(a, path) : run_scene<3>(a, path);
+  } catch (const RunFailure& f) {
+    fmt::print(stderr, "\nliquid: the run failed: {}\n", f.message);
+    return 1;
+  } catch (const liquid::Error& e) {
+    fmt::print(stderr, "liquid: error: {}\n", e.what());
+    return 2;
+  } catch (const std::bad_alloc&) {
+    fmt::print(stderr, "liquid: internal error: out of memory (a smaller --finest needs less)\n");
+    return 3;
+  } catch (const std::exception& e) {
+    fmt::print(stderr, "liquid: internal error: {}\n", e.what());
+    return 3;
+  }
+}

@@ -1,0 +1,361 @@
+#include "liquid/scene/runner.hpp"
+
+#include <fmt/format.h>
+#include <omp.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+
+#include "liquid/core/error.hpp"
+#include "liquid/io/archive.hpp"
+#include "liquid/io/point_output.hpp"
+#include "liquid/io/series.hpp"
+#include "liquid/io/tree_output.hpp"
+
+namespace liquid {
+
+namespace {
+
+constexpr char grid_separator = '\x1e';  // between the grids of one frame in a checkpoint
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+std::string join_grids(const std::vector<std::string>& grids) {
+  std::string out;
+  for (std::size_t i = 0; i < grids.size(); ++i) out += (i ? std::string(1, grid_separator) : "") + grids[i];
+  return out;
+}
+
+std::vector<std::string> split_grids(const std::string& text) {
+  std::vector<std::string> out(1);
+  for (char ch : text)
+    if (ch == grid_separator)
+      out.emplace_back();
+    else
+      out.back() += ch;
+  return out;
+}
+
+}  // namespace
+
+int checkpoint_dimension(const std::string& path) {
+  const io::ArchiveReader r(path);
+  const std::int64_t dim = r.scalar_int("dimension");
+  LIQUID_VERIFY(dim == 2 || dim == 3, "{}: 'dimension' is {}; not a checkpoint of this program", path, dim);
+  return static_cast<int>(dim);
+}
+
+template <int Dim>
+void apply_overrides(const SceneOverrides& o, Scene<Dim>& scene) {
+  PicOptions<Dim>& p = scene.pic;
+  if (!o.method.empty()) {
+    p.transfer = parse_pic_transfer(o.method);
+    if (p.transfer != PicTransfer::rbf) p.adaptive = false;
+  }
+  if (o.adaptive >= 0) p.adaptive = o.adaptive == 1;
+  LIQUID_VERIFY(!p.adaptive || p.transfer == PicTransfer::rbf,
+                "method '{}' runs on a regular grid only; drop --adaptive or use --method rbf",
+                to_string(p.transfer));
+  if (o.finest >= 0) {
+    LIQUID_VERIFY(o.finest >= 1 && o.finest <= morton::max_level<Dim>, "--finest {} is outside [1, {}]",
+                  o.finest, morton::max_level<Dim>);
+    const int shift = o.finest - p.fine_level;
+    p.fine_level = o.finest;
+    p.coarse_level = std::clamp(p.coarse_level + shift, 0, p.fine_level);
+  }
+  if (o.steps >= 0) {
+    LIQUID_VERIFY(o.steps >= 1, "--steps {} must be at least 1", o.steps);
+    scene.time.steps = o.steps;
+    scene.time.end = std::numeric_limits<double>::infinity();
+  }
+  if (o.until >= 0) {
+    LIQUID_VERIFY(o.until > 0 && std::isfinite(o.until), "--until {} must be a positive time", o.until);
+    scene.time.end = o.until;
+    scene.time.steps = -1;
+  }
+}
+
+template <int Dim>
+struct SceneRunner<Dim>::Private {
+  std::unique_ptr<io::SeriesWriter> series;
+};
+
+template <int Dim>
+SceneRunner<Dim>::SceneRunner(Scene<Dim> scene, RunSettings settings)
+    : SceneRunner(std::move(scene), std::move(settings), true) {}
+
+template <int Dim>
+SceneRunner<Dim>::SceneRunner(Scene<Dim> scene, RunSettings settings, bool seed)
+    : scene_(std::move(scene)), settings_(std::move(settings)), io_(std::make_unique<Private>()) {
+  LIQUID_VERIFY(settings_.checkpoint_every >= 0, "checkpoint interval {} is negative",
+                settings_.checkpoint_every);
+  LIQUID_VERIFY(settings_.checkpoint_every == 0 || !settings_.out.empty(),
+                "checkpoints need an output folder (--out)");
+  if (!settings_.out.empty()) {
+    std::error_code ec;
+    std::filesystem::create_directories(settings_.out, ec);
+    LIQUID_VERIFY(!ec, "cannot create the output folder '{}': {}", settings_.out, ec.message());
+    if (settings_.frames)
+      io_->series = std::make_unique<io::SeriesWriter>(
+          (std::filesystem::path(settings_.out) / (scene_.name + ".xmf")).string());
+  }
+  sim_ = std::make_unique<AdaptivePic<Dim>>(scene_.pic);
+  if (seed) {
+    sim_->seed(scene_.liquid, scene_.velocity);
+    write_frame();
+  }
+}
+
+template <int Dim>
+SceneRunner<Dim>::~SceneRunner() = default;
+template <int Dim>
+SceneRunner<Dim>::SceneRunner(SceneRunner&&) noexcept = default;
+
+template <int Dim>
+bool SceneRunner<Dim>::done() const {
+  if (scene_.time.steps >= 0) return sim_->step() >= scene_.time.steps;
+  return sim_->time() >= scene_.time.end * (1 - 1e-12);
+}
+
+template <int Dim>
+std::string SceneRunner<Dim>::stem(const char* what, long index) const {
+  return (std::filesystem::path(settings_.out) / fmt::format("{}_{}_{:06d}", scene_.name, what, index))
+      .string();
+}
+
+template <int Dim>
+const PicStepReport& SceneRunner<Dim>::step() {
+  const auto t0 = std::chrono::steady_clock::now();
+  const SceneTime& t = scene_.time;
+  double dt = std::clamp(sim_->stable_dt(t.cfl, t.dt_max), t.dt_min, t.dt_max);
+  if (t.steps < 0) {
+    const double left = t.end - sim_->time();
+    if (dt > left || left - dt < 1e-3 * dt) dt = left;  // land on the end time, no sliver step after
+  }
+  last_ = sim_->advance(dt);
+  ++steps_;
+  ppe_iterations_ += last_.ppe.iterations;
+  ppe_failures_ += last_.ppe.converged() ? 0 : 1;
+  sum_fluid_ += static_cast<double>(last_.n_fluid_cells);
+  sum_cells_ += static_cast<double>(last_.n_cells);
+  sum_particles_ += static_cast<double>(last_.n_particles);
+  // The regular grid's count for the same liquid at the same finest h (see RunSummary).
+  const CellGraph<Dim>& g = sim_->graph();
+  const int finest = scene_.pic.fine_level;
+  double regular = 0.0;
+  long fine_cells = 0, fine_particles = 0;
+  for (CellId c : sim_->classification().fluid) {
+    regular += std::ldexp(1.0, Dim * (finest - g.level(c)));
+    if (g.level(c) == finest) ++fine_cells, fine_particles += sim_->bins().count(c);
+  }
+  sum_regular_cells_ += regular;
+  sum_regular_particles_ += fine_cells > 0 ? regular * static_cast<double>(fine_particles) / fine_cells
+                                           : static_cast<double>(last_.n_particles);
+  if (settings_.frames && !settings_.out.empty() &&
+      (done() || (scene_.output.every > 0 && sim_->time() >= next_frame_ - 1e-9 * scene_.output.every)))
+    write_frame();
+  if (settings_.checkpoint_every > 0 && sim_->step() % settings_.checkpoint_every == 0) checkpoint();
+  wall_ += seconds_since(t0);
+  return last_;
+}
+
+template <int Dim>
+void SceneRunner<Dim>::write_frame() {
+  if (settings_.out.empty() || !settings_.frames) return;
+  const AdaptivePic<Dim>& s = *sim_;
+  std::vector<std::string> grids;
+  if (scene_.output.cells) {
+    const CellGraph<Dim>& g = s.graph();
+    std::vector<double> type(g.cell_capacity(), 0.0);
+    for (CellId c = 0; c < g.cell_capacity(); ++c)
+      if (g.alive(c)) type[c] = static_cast<double>(s.classification().type[c]);
+    const std::vector<io::CellField> fields = {{"pressure", s.pressure()}, {"type", type}};
+    const io::TreeFiles f = io::write_tree<Dim>(stem("cells", frame_), g, fields);
+    written_.push_back(f.h5);
+    grids.push_back(f.grid);
+  }
+  if (scene_.output.particles) {
+    const Particles<Dim>& p = s.particles();
+    std::vector<double> v(static_cast<std::size_t>(p.size()) * Dim), speed(p.size());
+    for (int i = 0; i < p.size(); ++i) {
+      for (int d = 0; d < Dim; ++d) v[static_cast<std::size_t>(i) * Dim + d] = p.v[i][d];
+      speed[i] = p.v[i].norm();
+    }
+    const std::vector<io::PointField> fields = {{"velocity", Dim, v}, {"speed", 1, speed}};
+    const io::PointFiles f = io::write_points<Dim>(stem("particles", frame_), p.x, fields);
+    written_.push_back(f.h5);
+    grids.push_back(f.grid);
+  }
+  if (!grids.empty()) {
+    io_->series->add(s.time(), grids);
+    written_.push_back(io_->series->path());
+  }
+  ++frame_;
+  next_frame_ = scene_.output.every > 0
+                    ? (std::floor(s.time() / scene_.output.every + 1e-9) + 1) * scene_.output.every
+                    : std::numeric_limits<double>::infinity();
+}
+
+template <int Dim>
+std::string SceneRunner<Dim>::checkpoint() {
+  LIQUID_VERIFY(!settings_.out.empty(), "a checkpoint needs an output folder (--out)");
+  const PicState<Dim> st = sim_->state();
+  const std::string path = stem("checkpoint", st.step) + ".h5";
+  io::ArchiveWriter w(path);
+  w.put_scalar("dimension", static_cast<std::int64_t>(Dim));
+  w.put_string(
+      "scene/path",
+      std::filesystem::absolute(settings_.scene_path.empty() ? scene_.path : settings_.scene_path).string());
+  const SceneOverrides& o = settings_.overrides;
+  w.put_string("overrides/method", o.method.empty() ? "-" : o.method);
+  w.put_scalar("overrides/adaptive", static_cast<std::int64_t>(o.adaptive));
+  w.put_scalar("overrides/finest", static_cast<std::int64_t>(o.finest));
+  w.put_scalar("overrides/steps", static_cast<std::int64_t>(o.steps));
+  w.put_scalar("overrides/until", o.until);
+  w.put_scalar("run/checkpoint_every", static_cast<std::int64_t>(settings_.checkpoint_every));
+
+  const CellGraphState<Dim>& gs = st.graph;
+  w.put("pic/graph/level", std::span<const std::int32_t>(gs.level));
+  w.put("pic/graph/address", std::span<const std::int64_t>(gs.address));
+  w.put("pic/graph/faces", std::span<const std::int32_t>(gs.faces));
+  w.put("pic/graph/face_alive", std::span<const std::uint8_t>(gs.face_alive));
+  w.put("pic/graph/free_cells", std::span<const std::int32_t>(gs.free_cells));
+  w.put("pic/graph/free_faces", std::span<const std::int32_t>(gs.free_faces));
+  w.put("pic/particles/x", std::span<const double>(st.x));
+  w.put("pic/particles/v", std::span<const double>(st.v));
+  w.put("pic/particles/cell", std::span<const std::int32_t>(st.particle_cell));
+  std::vector<std::int32_t> components(st.field_components.begin(), st.field_components.end());
+  w.put("pic/particles/field_components", std::span<const std::int32_t>(components));
+  for (std::size_t f = 0; f < st.field_names.size(); ++f) {
+    w.put_string(fmt::format("pic/particles/field_name_{}", f), st.field_names[f]);
+    w.put(fmt::format("pic/particles/field_{}", f), std::span<const double>(st.field_values[f]));
+  }
+  w.put("pic/u", std::span<const double>(st.u));
+  w.put("pic/p", std::span<const double>(st.p));
+  w.put("pic/known", std::span<const std::uint8_t>(st.known));
+  w.put_scalar("pic/time", st.time);
+  w.put_scalar("pic/step", static_cast<std::int64_t>(st.step));
+
+  w.put_scalar("run/frame", static_cast<std::int64_t>(frame_));
+  w.put_scalar("run/next_frame", next_frame_);
+  w.put_scalar("run/steps", static_cast<std::int64_t>(steps_));
+  w.put_scalar("run/ppe_iterations", static_cast<std::int64_t>(ppe_iterations_));
+  w.put_scalar("run/ppe_failures", static_cast<std::int64_t>(ppe_failures_));
+  const std::vector<double> sums = {sum_fluid_, sum_cells_, sum_particles_, sum_regular_cells_,
+                                    sum_regular_particles_};
+  w.put("run/sums", std::span<const double>(sums));
+  std::vector<double> times;
+  if (io_->series)
+    for (const io::SeriesFrame& f : io_->series->frames()) {
+      w.put_string(fmt::format("run/series/frame_{}", times.size()), join_grids(f.grids));
+      times.push_back(f.time);
+    }
+  w.put("run/series/times", std::span<const double>(times));
+  w.commit();
+  written_.push_back(path);
+  return path;
+}
+
+template <int Dim>
+SceneRunner<Dim> SceneRunner<Dim>::resume(const std::string& checkpoint, RunSettings settings) {
+  const io::ArchiveReader r(checkpoint);
+  LIQUID_VERIFY(r.scalar_int("dimension") == Dim, "{}: a {}D checkpoint, not {}D", checkpoint,
+                r.scalar_int("dimension"), Dim);
+  settings.scene_path = r.string("scene/path");
+  SceneOverrides& o = settings.overrides;
+  o.method = r.string("overrides/method") == "-" ? "" : r.string("overrides/method");
+  o.adaptive = static_cast<int>(r.scalar_int("overrides/adaptive"));
+  o.finest = static_cast<int>(r.scalar_int("overrides/finest"));
+  o.steps = r.scalar_int("overrides/steps");
+  o.until = r.scalar_double("overrides/until");
+  if (settings.checkpoint_every == 0) settings.checkpoint_every = r.scalar_int("run/checkpoint_every");
+  LIQUID_VERIFY(std::filesystem::is_regular_file(settings.scene_path),
+                "{}: its scene file {} is gone; a checkpoint needs the scene it was made from", checkpoint,
+                settings.scene_path);
+  Scene<Dim> scene = load_scene<Dim>(settings.scene_path);
+  apply_overrides<Dim>(o, scene);
+
+  PicState<Dim> st;
+  st.graph.domain = scene.pic.domain;
+  st.graph.options.max_jump = scene.pic.max_jump;
+  st.graph.options.min_level =
+      scene.pic.adaptive ? std::min(scene.pic.coarse_level, scene.pic.fine_level) : scene.pic.fine_level;
+  st.graph.options.max_level = scene.pic.fine_level;
+  st.graph.level = r.int32s("pic/graph/level");
+  st.graph.address = r.int64s("pic/graph/address");
+  st.graph.faces = r.int32s("pic/graph/faces");
+  st.graph.face_alive = r.uint8s("pic/graph/face_alive");
+  st.graph.free_cells = r.int32s("pic/graph/free_cells");
+  st.graph.free_faces = r.int32s("pic/graph/free_faces");
+  st.x = r.doubles("pic/particles/x");
+  st.v = r.doubles("pic/particles/v");
+  st.particle_cell = r.int32s("pic/particles/cell");
+  const std::vector<std::int32_t> components = r.int32s("pic/particles/field_components");
+  for (std::size_t f = 0; f < components.size(); ++f) {
+    st.field_names.push_back(r.string(fmt::format("pic/particles/field_name_{}", f)));
+    st.field_components.push_back(components[f]);
+    st.field_values.push_back(r.doubles(fmt::format("pic/particles/field_{}", f)));
+  }
+  st.u = r.doubles("pic/u");
+  st.p = r.doubles("pic/p");
+  st.known = r.uint8s("pic/known");
+  st.time = r.scalar_double("pic/time");
+  st.step = r.scalar_int("pic/step");
+
+  SceneRunner run(std::move(scene), std::move(settings), false);
+  try {
+    run.sim_->restore(st);
+  } catch (const Error& e) {
+    throw Error(fmt::format("{}: {}", checkpoint, e.what()));
+  }
+  run.frame_ = static_cast<int>(r.scalar_int("run/frame"));
+  run.next_frame_ = r.scalar_double("run/next_frame");
+  run.steps_ = r.scalar_int("run/steps");
+  run.ppe_iterations_ = r.scalar_int("run/ppe_iterations");
+  run.ppe_failures_ = r.scalar_int("run/ppe_failures");
+  const std::vector<double> sums = r.doubles("run/sums");
+  LIQUID_VERIFY(sums.size() == 5, "{}: run/sums has {} entries, expected 5", checkpoint, sums.size());
+  run.sum_fluid_ = sums[0], run.sum_cells_ = sums[1], run.sum_particles_ = sums[2];
+  run.sum_regular_cells_ = sums[3], run.sum_regular_particles_ = sums[4];
+  if (run.io_->series) {
+    std::vector<io::SeriesFrame> frames;
+    const std::vector<double> times = r.doubles("run/series/times");
+    for (std::size_t f = 0; f < times.size(); ++f)
+      frames.push_back({times[f], split_grids(r.string(fmt::format("run/series/frame_{}", f)))});
+    if (!frames.empty()) run.io_->series->restore(std::move(frames));
+  }
+  return run;
+}
+
+template <int Dim>
+RunSummary SceneRunner<Dim>::summary() const {
+  RunSummary s;
+  s.steps = steps_;
+  s.time = sim_->time();
+  const double n = std::max<long>(steps_, 1);
+  s.fluid_cells = sum_fluid_ / n;
+  s.cells = sum_cells_ / n;
+  s.particles = sum_particles_ / n;
+  s.regular_cells = sum_regular_cells_ / n;
+  s.regular_particles = sum_regular_particles_ / n;
+  const PhaseTimer& t = sim_->timer();
+  const auto total = t.entries().find("total");
+  const double calls = total == t.entries().end() ? 1.0 : std::max<double>(total->second.calls, 1.0);
+  for (const auto& [name, e] : t.entries()) s.seconds[name] = e.seconds / calls;
+  s.ppe_iterations = ppe_iterations_;
+  s.ppe_failures = ppe_failures_;
+  s.threads = omp_get_max_threads();
+  s.wall = wall_;
+  return s;
+}
+
+template void apply_overrides<2>(const SceneOverrides&, Scene<2>&);
+template void apply_overrides<3>(const SceneOverrides&, Scene<3>&);
+template class SceneRunner<2>;
+template class SceneRunner<3>;
+
+}  // namespace liquid

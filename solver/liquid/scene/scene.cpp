@@ -1,0 +1,475 @@
+// Reading a scene file: one TableReader per TOML table knows the table's keys, reads each as its
+// type with the file and line in every message, and refuses the keys it does not know.
+#include "liquid/scene/scene.hpp"
+
+#include <fmt/format.h>
+
+#include <toml++/toml.h>
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <optional>
+
+#include "liquid/core/error.hpp"
+
+#ifndef LIQUID_SCENES_DIR
+#define LIQUID_SCENES_DIR "solver/scenes"
+#endif
+
+namespace liquid {
+
+namespace {
+
+int edit_distance(const std::string& a, const std::string& b) {
+  std::vector<int> row(b.size() + 1);
+  for (std::size_t j = 0; j <= b.size(); ++j) row[j] = static_cast<int>(j);
+  for (std::size_t i = 1; i <= a.size(); ++i) {
+    int diagonal = row[0];
+    row[0] = static_cast<int>(i);
+    for (std::size_t j = 1; j <= b.size(); ++j) {
+      const int up = row[j];
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (a[i - 1] == b[j - 1] ? 0 : 1)});
+      diagonal = up;
+    }
+  }
+  return row[b.size()];
+}
+
+toml::table parse(const std::string& path) {
+  LIQUID_VERIFY(std::filesystem::is_regular_file(path), "scene file '{}' does not exist or is not a file",
+                path);
+  try {
+    return toml::parse_file(path);
+  } catch (const toml::parse_error& e) {
+    throw Error(
+        fmt::format("{}:{}:{}: {}", path, e.source().begin.line, e.source().begin.column, e.description()));
+  }
+}
+
+/// Reads the keys of one table. Every read names "FILE:LINE: key 'PREFIX.KEY'" on failure.
+class TableReader {
+ public:
+  TableReader(const toml::table& table, std::string path, std::string prefix, std::vector<std::string> known)
+      : table_(table), path_(std::move(path)), prefix_(std::move(prefix)), known_(std::move(known)) {
+    for (const auto& [key, node] : table_) {
+      const std::string k(key.str());
+      if (std::find(known_.begin(), known_.end(), k) != known_.end()) continue;
+      std::string hint;
+      int best = 3;
+      for (const std::string& candidate : known_)
+        if (const int d = edit_distance(k, candidate); d < best) best = d, hint = candidate;
+      throw Error(fmt::format("{}: unknown key '{}'{} (known here: {})", line(node), name(k),
+                              hint.empty() ? "" : fmt::format(" (did you mean '{}'?)", hint),
+                              fmt::join(known_, ", ")));
+    }
+  }
+
+  bool has(const char* key) const { return table_.contains(key); }
+  std::string name(const std::string& key) const { return prefix_.empty() ? key : prefix_ + "." + key; }
+  std::string line(const toml::node& node) const {
+    return fmt::format("{}:{}", path_, node.source().begin.line);
+  }
+  std::string where(const char* key) const {
+    const toml::node* n = table_.get(key);
+    return fmt::format("{}: key '{}'", n ? line(*n) : line(table_), name(key));
+  }
+  std::string where_table() const { return fmt::format("{}: [{}]", line(table_), prefix_); }
+
+  double number(const char* key, std::optional<double> fallback = std::nullopt) const {
+    const toml::node* n = table_.get(key);
+    if (!n) return required(key, fallback);
+    std::optional<double> v;
+    if (n->is_floating_point()) v = n->as_floating_point()->get();
+    if (n->is_integer()) v = static_cast<double>(n->as_integer()->get());
+    LIQUID_VERIFY(v.has_value(), "{}: expected a number, found {}", where(key), type_name(*n));
+    LIQUID_VERIFY(std::isfinite(*v), "{}: expected a finite number, found {}", where(key), *v);
+    return *v;
+  }
+  double positive(const char* key, std::optional<double> fallback = std::nullopt) const {
+    const double v = number(key, fallback);
+    LIQUID_VERIFY(v > 0.0, "{}: must be positive (found {})", where(key), v);
+    return v;
+  }
+  long integer(const char* key, std::optional<long> fallback = std::nullopt) const {
+    const toml::node* n = table_.get(key);
+    if (!n) return required(key, fallback);
+    LIQUID_VERIFY(n->is_integer(), "{}: expected an integer, found {}", where(key), type_name(*n));
+    return static_cast<long>(n->as_integer()->get());
+  }
+  long integer_in(const char* key, long lo, long hi, std::optional<long> fallback = std::nullopt) const {
+    const long v = integer(key, fallback);
+    LIQUID_VERIFY(v >= lo && v <= hi, "{}: {} is outside [{}, {}]", where(key), v, lo, hi);
+    return v;
+  }
+  bool boolean(const char* key, bool fallback) const {
+    const toml::node* n = table_.get(key);
+    if (!n) return fallback;
+    LIQUID_VERIFY(n->is_boolean(), "{}: expected true or false, found {}", where(key), type_name(*n));
+    return n->as_boolean()->get();
+  }
+  std::string string(const char* key, std::optional<std::string> fallback = std::nullopt) const {
+    const toml::node* n = table_.get(key);
+    if (!n) return required(key, fallback);
+    LIQUID_VERIFY(n->is_string(), "{}: expected a string, found {}", where(key), type_name(*n));
+    return n->as_string()->get();
+  }
+  /// A string that must be one of `choices`.
+  std::string choice(const char* key, const std::vector<std::string>& choices,
+                     std::optional<std::string> fallback = std::nullopt) const {
+    const std::string v = string(key, fallback);
+    LIQUID_VERIFY(std::find(choices.begin(), choices.end(), v) != choices.end(), "{}: '{}' is not one of {}",
+                  where(key), v, fmt::join(choices, ", "));
+    return v;
+  }
+  template <int Dim>
+  Vec<Dim> vec(const char* key, std::optional<Vec<Dim>> fallback = std::nullopt) const {
+    const toml::node* n = table_.get(key);
+    if (!n) return required(key, fallback);
+    const toml::array* a = n->as_array();
+    LIQUID_VERIFY(a != nullptr, "{}: expected an array of {} numbers, found {}", where(key), Dim,
+                  type_name(*n));
+    LIQUID_VERIFY(static_cast<int>(a->size()) == Dim, "{}: expected {} numbers (the scene is {}D), found {}",
+                  where(key), Dim, Dim, a->size());
+    Vec<Dim> v;
+    for (int d = 0; d < Dim; ++d) {
+      const toml::node& e = *a->get(d);
+      std::optional<double> x;
+      if (e.is_floating_point()) x = e.as_floating_point()->get();
+      if (e.is_integer()) x = static_cast<double>(e.as_integer()->get());
+      LIQUID_VERIFY(x && std::isfinite(*x), "{}: entry {} is not a finite number", where(key), d + 1);
+      v[d] = *x;
+    }
+    return v;
+  }
+  const toml::table* table(const char* key) const {
+    const toml::node* n = table_.get(key);
+    if (!n) return nullptr;
+    LIQUID_VERIFY(n->is_table(), "{}: expected a table [{}], found {}", where(key), name(key), type_name(*n));
+    return n->as_table();
+  }
+  /// The tables of an array of tables [[key]] (empty when absent).
+  std::vector<const toml::table*> tables(const char* key) const {
+    std::vector<const toml::table*> out;
+    const toml::node* n = table_.get(key);
+    if (!n) return out;
+    const toml::array* a = n->as_array();
+    LIQUID_VERIFY(a != nullptr, "{}: expected an array of tables [[{}]], found {}", where(key), name(key),
+                  type_name(*n));
+    for (const toml::node& e : *a) {
+      LIQUID_VERIFY(e.is_table(), "{}: every entry of [[{}]] must be a table", line(e), name(key));
+      out.push_back(e.as_table());
+    }
+    return out;
+  }
+  const std::string& path() const { return path_; }
+
+ private:
+  template <class T>
+  T required(const char* key, const std::optional<T>& fallback) const {
+    LIQUID_VERIFY(fallback.has_value(), "{}: missing key '{}'", prefix_.empty() ? path_ : where_table(),
+                  name(key));
+    return *fallback;
+  }
+  static const char* type_name(const toml::node& n) {
+    switch (n.type()) {
+      case toml::node_type::string:
+        return "a string";
+      case toml::node_type::integer:
+        return "an integer";
+      case toml::node_type::floating_point:
+        return "a number";
+      case toml::node_type::boolean:
+        return "a boolean";
+      case toml::node_type::array:
+        return "an array";
+      case toml::node_type::table:
+        return "a table";
+      default:
+        return "a date or time";
+    }
+  }
+
+  const toml::table& table_;
+  std::string path_, prefix_;
+  std::vector<std::string> known_;
+};
+
+template <int Dim>
+levelset::Function<Dim> cylinder(const Vec<Dim>& centre, double radius, int axis, double half_length) {
+  return [=](const Vec<Dim>& x) {
+    Vec<Dim> r = x - centre;
+    const double along = std::abs(r[axis]);
+    r[axis] = 0.0;
+    return std::max(r.norm() - radius, along - half_length);
+  };
+}
+
+/// One shape of [[fluid]], [[solid]] or [[source]]: its level set and bounding box.
+template <int Dim>
+struct Shape {
+  levelset::Function<Dim> phi;
+  Box<Dim> bounds;
+  std::string op;
+};
+
+const std::vector<std::string> shape_keys = {"shape", "op", "lo", "hi", "centre", "radius", "axis", "length"};
+
+template <int Dim>
+Shape<Dim> read_shape(const TableReader& r, bool with_op) {
+  Shape<Dim> s;
+  s.op = with_op ? r.choice("op", {"add", "subtract", "intersect"}, std::string("add")) : "add";
+  const std::vector<std::string> kinds = Dim == 3 ? std::vector<std::string>{"box", "sphere", "cylinder"}
+                                                  : std::vector<std::string>{"box", "sphere"};
+  const std::string kind = r.choice("shape", kinds);
+  const auto refuse = [&](const char* key) {
+    LIQUID_VERIFY(!r.has(key), "{}: a {} has no '{}'", r.where(key), kind, key);
+  };
+  if (kind == "box") {
+    for (const char* k : {"centre", "radius", "axis", "length"}) refuse(k);
+    s.bounds = {r.vec<Dim>("lo"), r.vec<Dim>("hi")};
+    for (int d = 0; d < Dim; ++d)
+      LIQUID_VERIFY(s.bounds.lo[d] < s.bounds.hi[d],
+                    "{}: hi must exceed lo on every axis (axis {}: {} <= {})", r.where("hi"), d,
+                    s.bounds.hi[d], s.bounds.lo[d]);
+    s.phi = levelset::box<Dim>(s.bounds);
+  } else if (kind == "sphere") {
+    for (const char* k : {"lo", "hi", "axis", "length"}) refuse(k);
+    const Vec<Dim> c = r.vec<Dim>("centre");
+    const double radius = r.positive("radius");
+    s.bounds = {c.array() - radius, c.array() + radius};
+    s.phi = levelset::sphere<Dim>(c, radius);
+  } else {
+    for (const char* k : {"lo", "hi"}) refuse(k);
+    const Vec<Dim> c = r.vec<Dim>("centre");
+    const double radius = r.positive("radius");
+    const std::string axis = r.choice("axis", {"x", "y", "z"});
+    const int a = axis[0] - 'x';
+    const double half = 0.5 * r.positive("length", std::numeric_limits<double>::infinity());
+    s.bounds = {c.array() - radius, c.array() + radius};
+    s.bounds.lo[a] = c[a] - half, s.bounds.hi[a] = c[a] + half;
+    s.phi = cylinder<Dim>(c, radius, a, half);
+  }
+  return s;
+}
+
+template <int Dim>
+levelset::Function<Dim> combine(levelset::Function<Dim> so_far, const Shape<Dim>& s) {
+  if (!so_far) return s.phi;
+  if (s.op == "subtract") return levelset::subtract<Dim>(so_far, s.phi);
+  if (s.op == "intersect") return levelset::intersect<Dim>(so_far, s.phi);
+  return levelset::unite<Dim>(so_far, s.phi);
+}
+
+template <int Dim>
+bool inside(const Box<Dim>& inner, const Box<Dim>& outer) {
+  const double tol = 1e-12 * outer.size().maxCoeff();
+  return (inner.lo.array() >= outer.lo.array() - tol).all() &&
+         (inner.hi.array() <= outer.hi.array() + tol).all();
+}
+
+template <int Dim>
+std::string format_box(const Box<Dim>& b) {
+  return fmt::format("[{}] to [{}]", fmt::join(b.lo.data(), b.lo.data() + Dim, ", "),
+                     fmt::join(b.hi.data(), b.hi.data() + Dim, ", "));
+}
+
+}  // namespace
+
+int scene_dimension(const std::string& path) {
+  const toml::table doc = parse(path);
+  const toml::table* domain = doc["domain"].as_table();
+  LIQUID_VERIFY(domain != nullptr, "{}: missing table [domain]", path);
+  const toml::array* lo = (*domain)["lo"].as_array();
+  LIQUID_VERIFY(lo != nullptr, "{}:{}: missing key 'domain.lo' (an array of 2 or 3 numbers)", path,
+                domain->source().begin.line);
+  LIQUID_VERIFY(lo->size() == 2 || lo->size() == 3,
+                "{}:{}: key 'domain.lo' has {} entries; a scene is 2D or 3D", path, lo->source().begin.line,
+                lo->size());
+  return static_cast<int>(lo->size());
+}
+
+template <int Dim>
+Scene<Dim> load_scene(const std::string& path) {
+  const toml::table doc = parse(path);
+  const TableReader top(doc, path, "",
+                        {"name", "description", "domain", "grid", "solver", "time", "ppe", "output", "fluid",
+                         "solid", "source"});
+  Scene<Dim> s;
+  s.path = path;
+  s.name = top.string("name", std::filesystem::path(path).stem().string());
+  s.description = top.string("description", std::string());
+  PicOptions<Dim>& o = s.pic;
+
+  const toml::table* domain = top.table("domain");
+  LIQUID_VERIFY(domain != nullptr, "{}: missing table [domain] (lo and hi)", path);
+  {
+    const TableReader r(*domain, path, "domain", {"lo", "hi"});
+    LIQUID_VERIFY(r.has("lo"), "{}: missing key 'domain.lo'", r.where_table());
+    const int found = static_cast<int>((*domain)["lo"].as_array() ? (*domain)["lo"].as_array()->size() : 0);
+    LIQUID_VERIFY(found == Dim, "{}: a {}D scene was expected, domain.lo has {} entries", r.where("lo"), Dim,
+                  found);
+    o.domain = {r.vec<Dim>("lo"), r.vec<Dim>("hi")};
+    for (int d = 0; d < Dim; ++d)
+      LIQUID_VERIFY(o.domain.lo[d] < o.domain.hi[d], "{}: hi must exceed lo on every axis (axis {})",
+                    r.where("hi"), d);
+  }
+
+  static const toml::table empty;
+  {
+    const toml::table* t = top.table("grid");
+    LIQUID_VERIFY(t != nullptr, "{}: missing table [grid] (at least 'finest')", path);
+    const TableReader r(*t, path, "grid", {"finest", "coarse", "max_jump", "band"});
+    o.fine_level = static_cast<int>(r.integer_in("finest", 1, morton::max_level<Dim>));
+    o.coarse_level = static_cast<int>(r.integer_in("coarse", 0, o.fine_level, std::max(0, o.fine_level - 3)));
+    if (r.has("max_jump") && (*t)["max_jump"].is_string()) {
+      r.choice("max_jump", {"unlimited"});
+      o.max_jump = unlimited_jump;
+    } else {
+      o.max_jump = static_cast<int>(r.integer_in("max_jump", 1, 4, 2));
+    }
+    o.band = static_cast<int>(r.integer_in("band", 0, 16, 2));
+  }
+  {
+    const toml::table* t = top.table("solver");
+    const TableReader r(
+        t ? *t : empty, path, "solver",
+        {"method", "adaptive", "flip", "integrator", "reseed", "gravity", "extrapolation", "advect_cfl"});
+    o.transfer = parse_pic_transfer(r.choice("method", {"rbf", "pic", "flip", "apic"}, std::string("rbf")));
+    o.adaptive = r.boolean("adaptive", o.transfer == PicTransfer::rbf);
+    LIQUID_VERIFY(
+        !o.adaptive || o.transfer == PicTransfer::rbf,
+        "{}: method '{}' runs on a uniform grid: set solver.adaptive = false (adaptive trees use rbf)",
+        r.where("adaptive"), to_string(o.transfer));
+    o.flip = r.number("flip", 0.95);
+    LIQUID_VERIFY(o.flip >= 0.0 && o.flip <= 1.0, "{}: {} is outside [0, 1]", r.where("flip"), o.flip);
+    o.integrator = r.choice("integrator", {"rk2", "rk3"}, std::string("rk2")) == "rk2" ? Integrator::rk2
+                                                                                       : Integrator::rk3;
+    o.reseed = r.boolean("reseed", true);
+    o.gravity = r.vec<Dim>("gravity", PicOptions<Dim>::default_gravity());
+    o.extrapolation_layers = static_cast<int>(r.integer_in("extrapolation", 1, 64, 4));
+    o.advect_cfl = r.positive("advect_cfl", 1.0);
+  }
+  {
+    const toml::table* t = top.table("time");
+    LIQUID_VERIFY(t != nullptr, "{}: missing table [time] (end or steps)", path);
+    const TableReader r(*t, path, "time", {"end", "steps", "cfl", "dt_min", "dt_max"});
+    LIQUID_VERIFY(r.has("end") || r.has("steps"), "{}: give 'time.end' (seconds) or 'time.steps'",
+                  r.where_table());
+    if (r.has("end")) s.time.end = r.positive("end");
+    if (r.has("steps")) s.time.steps = r.integer_in("steps", 1, 100000000);
+    s.time.cfl = r.positive("cfl", 1.0);
+    s.time.dt_max = r.positive("dt_max", 0.01);
+    s.time.dt_min = r.positive("dt_min", std::min(1e-5, s.time.dt_max));
+    LIQUID_VERIFY(s.time.dt_min <= s.time.dt_max, "{}: dt_min {} exceeds dt_max {}", r.where("dt_min"),
+                  s.time.dt_min, s.time.dt_max);
+  }
+  {
+    const toml::table* t = top.table("ppe");
+    const TableReader r(t ? *t : empty, path, "ppe",
+                        {"solver", "tolerance", "max_iterations", "continue_on_failure"});
+    const std::vector<std::string> names = linalg::solver_names();
+    o.solver.kind = linalg::parse_solver(r.choice("solver", names, linalg::to_string(o.solver.kind)));
+    o.solver.tolerance = r.positive("tolerance", o.solver.tolerance);
+    LIQUID_VERIFY(o.solver.tolerance < 1.0, "{}: a relative tolerance must be below 1 (found {})",
+                  r.where("tolerance"), o.solver.tolerance);
+    o.solver.max_iterations =
+        static_cast<int>(r.integer_in("max_iterations", 1, 10000000, o.solver.max_iterations));
+    o.continue_on_ppe_failure = r.boolean("continue_on_failure", false);
+  }
+  {
+    const toml::table* t = top.table("output");
+    const TableReader r(t ? *t : empty, path, "output", {"every", "cells", "particles"});
+    s.output.every = r.has("every") ? r.positive("every") : 0.0;
+    s.output.cells = r.boolean("cells", true);
+    s.output.particles = r.boolean("particles", true);
+  }
+
+  // Liquid, solids, sources.
+  const auto fluids = top.tables("fluid");
+  LIQUID_VERIFY(!fluids.empty(), "{}: no [[fluid]] shape: the scene holds no liquid", path);
+  std::vector<std::pair<levelset::Function<Dim>, Vec<Dim>>> moving;
+  for (const toml::table* t : fluids) {
+    std::vector<std::string> keys = shape_keys;
+    keys.push_back("velocity");
+    const TableReader r(*t, path, "fluid", keys);
+    const Shape<Dim> shape = read_shape<Dim>(r, true);
+    LIQUID_VERIFY(s.liquid || shape.op == "add", "{}: the first [[fluid]] shape must add liquid",
+                  r.where("op"));
+    if (shape.op == "add")
+      LIQUID_VERIFY(inside<Dim>(shape.bounds, o.domain), "{}: the fluid {} reaches outside the domain {}",
+                    r.where("shape"), format_box<Dim>(shape.bounds), format_box<Dim>(o.domain));
+    if (r.has("velocity")) moving.emplace_back(shape.phi, r.vec<Dim>("velocity"));
+    s.liquid = combine<Dim>(s.liquid, shape);
+  }
+  if (!moving.empty())
+    s.velocity = [moving](const Vec<Dim>& x) {
+      Vec<Dim> v = Vec<Dim>::Zero();
+      for (const auto& [phi, u] : moving)
+        if (phi(x) < 0.0) v = u;
+      return v;
+    };
+  for (const toml::table* t : top.tables("solid")) {
+    const TableReader r(*t, path, "solid", shape_keys);
+    const Shape<Dim> shape = read_shape<Dim>(r, true);
+    LIQUID_VERIFY(o.solid || shape.op == "add", "{}: the first [[solid]] shape must add solid",
+                  r.where("op"));
+    o.solid = combine<Dim>(o.solid, shape);
+  }
+  for (const toml::table* t : top.tables("source")) {
+    std::vector<std::string> keys = shape_keys;
+    keys.erase(std::find(keys.begin(), keys.end(), "op"));
+    keys.insert(keys.end(), {"velocity", "start", "stop"});
+    const TableReader r(*t, path, "source", keys);
+    const Shape<Dim> shape = read_shape<Dim>(r, false);
+    LIQUID_VERIFY(inside<Dim>(shape.bounds, o.domain), "{}: the source {} reaches outside the domain {}",
+                  r.where("shape"), format_box<Dim>(shape.bounds), format_box<Dim>(o.domain));
+    PicSource<Dim> src;
+    src.region = shape.phi;
+    src.velocity = r.vec<Dim>("velocity");
+    src.start = r.number("start", 0.0);
+    src.stop = r.number("stop", std::numeric_limits<double>::infinity());
+    LIQUID_VERIFY(src.start >= 0.0 && src.stop > src.start, "{}: need 0 <= start < stop (found {} and {})",
+                  r.where("stop"), src.start, src.stop);
+    o.sources.push_back(src);
+  }
+  return s;
+}
+
+std::string scenes_folder() {
+  if (const char* env = std::getenv("LIQUID_SCENES"); env && *env) return env;
+  return LIQUID_SCENES_DIR;
+}
+
+std::string find_scene(const std::string& name_or_path) {
+  if (std::filesystem::is_regular_file(name_or_path)) return name_or_path;
+  const std::filesystem::path builtin = std::filesystem::path(scenes_folder()) / (name_or_path + ".toml");
+  if (std::filesystem::is_regular_file(builtin)) return builtin.string();
+  std::vector<std::string> names;
+  for (const auto& [name, description] : builtin_scenes()) names.push_back(name);
+  throw Error(fmt::format("no scene file '{}' and no built-in scene of that name (built-in, in {}: {})",
+                          name_or_path, scenes_folder(), fmt::join(names, ", ")));
+}
+
+std::vector<std::pair<std::string, std::string>> builtin_scenes() {
+  std::vector<std::pair<std::string, std::string>> out;
+  std::error_code ec;
+  for (const auto& entry : std::filesystem::directory_iterator(scenes_folder(), ec)) {
+    if (entry.path().extension() != ".toml") continue;
+    std::string description;
+    try {
+      const toml::table doc = parse(entry.path().string());
+      description = doc["description"].value_or(std::string());
+    } catch (const Error& e) {
+      description = std::string("(cannot be read: ") + e.what() + ")";
+    }
+    out.emplace_back(entry.path().stem().string(), description);
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+template Scene<2> load_scene<2>(const std::string&);
+template Scene<3> load_scene<3>(const std::string&);
+
+}  // namespace liquid

@@ -1,0 +1,66 @@
+#pragma once
+// Scenes: a liquid simulation described in a TOML file (every key: solver/scenes/README.md), read
+// once into typed values. The dimension is the length of domain.lo (2 or 3).
+//
+//   const std::string path = find_scene("dam-break-2d");   // a built-in name or a file path
+//   if (scene_dimension(path) == 2) { Scene<2> s = load_scene<2>(path); ... }
+//
+// A bad file is refused with liquid::Error and a message "FILE:LINE: key 'grid.finest': ..." that
+// names the key: unknown keys (with the nearest known one), wrong types, sizes that are not
+// positive, a fluid shape outside the domain, values out of range.
+
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "liquid/levelset/levelset.hpp"
+#include "liquid/pic/adaptive_pic.hpp"
+
+namespace liquid {
+
+/// When a run ends and how its steps are sized.
+struct SceneTime {
+  double end = std::numeric_limits<double>::infinity();  ///< simulated seconds
+  long steps = -1;                                       ///< or a step count (-1: by `end`)
+  double cfl = 1.0;                                      ///< dt = cfl * finest h / max speed ...
+  double dt_min = 1e-5, dt_max = 0.01;                   ///< ... clamped to [dt_min, dt_max]
+};
+
+/// What the run writes.
+struct SceneOutput {
+  double every = 0.0;     ///< simulated seconds between frames (0: the first and the last only)
+  bool cells = true;      ///< the tree's leaves with pressure, type and level
+  bool particles = true;  ///< the particles with velocity and speed
+};
+
+template <int Dim>
+struct Scene {
+  std::string name;         ///< the file's `name`, or its stem
+  std::string description;  ///< one line
+  std::string path;         ///< the file read
+  PicOptions<Dim> pic;      ///< domain, levels, method, solids, sources, PPE
+  levelset::Function<Dim> liquid;
+  /// Initial velocity by position: that of the last [[fluid]] shape holding the point (0 if none).
+  std::function<Vec<Dim>(const Vec<Dim>&)> velocity;
+  SceneTime time;
+  SceneOutput output;
+};
+
+/// 2 or 3, from domain.lo of the file (throws as load_scene does on a file that cannot be read).
+int scene_dimension(const std::string& path);
+/// Reads and checks a scene file; dimension must be Dim.
+template <int Dim>
+Scene<Dim> load_scene(const std::string& path);
+
+/// The folder of the built-in scenes (LIQUID_SCENES, else the source tree's solver/scenes).
+std::string scenes_folder();
+/// A path as given when it names a file; else the built-in scene of that name (NAME.toml in
+/// scenes_folder()). Throws listing the built-in names when neither exists.
+std::string find_scene(const std::string& name_or_path);
+/// The built-in scenes: (name, description), sorted by name.
+std::vector<std::pair<std::string, std::string>> builtin_scenes();
+
+extern template Scene<2> load_scene<2>(const std::string&);
+extern template Scene<3> load_scene<3>(const std::string&);
+
+}  // namespace liquid
