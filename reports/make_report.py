@@ -6,12 +6,15 @@ Usage: make_report.py DIR
 Reads DIR/summary.json and, for every case in it, DIR/<case>.json and DIR/<case>.md (written by
 `liquid-verify suite`). Writes DIR/README.md: a summary table, then every case's tables and notes,
 with a log-log plot (PNG) of every error series a case records under "series", drawn with a
-second-order reference slope.
+second-order reference slope. Scene runs in DIR/frames/<scene>/ (liquid run --out, with
+DIR/frames/<scene>.json from --json) add a picture of their last frame and their Table 1 row;
+DIR/table1/table1.md (ci/bench-scenes) is included when present.
 """
 
 import json
 import math
 import pathlib
+import subprocess
 import sys
 
 
@@ -73,7 +76,45 @@ PAPER = {
     "poisson-rbf-degree": "degree 2 (Pi_2, section 7), about 2 for p and grad p",
     "hydrostatic-pool": "still: small drift, spurious speed and pressure error (RBF Liquids, Fig. 16)",
     "transfer-accuracy": "RBF below MLS (RBF Liquids, Fig. 4); RBF keeps more energy than PIC (Fig. 10)",
+    "scene-smoke": "-",
 }
+
+
+def scene_section(out_dir):
+    """Pictures of the last frame of every scene run in DIR/frames, with its Table 1 row."""
+    frames = out_dir / "frames"
+    if not frames.is_dir():
+        return ""
+    lines = ["## Scenes", "",
+             "`liquid run` on two built-in scenes (2D, default levels): the last frame (cells: air white, "
+             "fluid blue, solid grey; particles coloured by speed) and the run's Table 1 row. % reg: share "
+             "of a regular grid at the same finest h for the same liquid, computed from the run's own "
+             "fluid cells.", ""]
+    lines += ["| scene | steps | t (s) | fluid cells | % reg | particles | % reg | grid s | ppe s | laplacian s "
+              "| transfer s | total s |", "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: "
+              "| ---: | ---: |"]
+    pictures = []
+    for summary in sorted(frames.glob("*.json")):
+        name = summary.stem
+        s = json.loads(summary.read_text())
+        sec = s["seconds_per_step"]
+        pct = lambda a, b: 100.0 * a / b if b else 0.0
+        lines.append(f"| {name} | {s['steps']} | {s['time']:.3f} | {s['fluid_cells']:.0f} | "
+                     f"{pct(s['fluid_cells'], s['regular_cells']):.1f} | {s['particles']:.0f} | "
+                     f"{pct(s['particles'], s['regular_particles']):.1f} | {sec.get('grid', 0):.4f} | "
+                     f"{sec.get('ppe', 0):.4f} | {sec.get('laplacian', 0):.4f} | "
+                     f"{sec.get('p2g', 0) + sec.get('g2p', 0):.4f} | {sec.get('total', 0):.4f} |")
+        cells = sorted((frames / name).glob(f"{name}_cells_*.h5"))
+        particles = sorted((frames / name).glob(f"{name}_particles_*.h5"))
+        if cells and particles:
+            png = f"frame-{name}.png"
+            done = subprocess.run(["/usr/bin/python3",
+                                   str(pathlib.Path(__file__).with_name("frame_picture.py")), str(cells[-1]),
+                                   str(particles[-1]), str(out_dir / png),
+                                   f"{name}, t = {s['time']:.2f} s (last frame)"])
+            if done.returncode == 0:
+                pictures.append(f"![{name}]({png})")
+    return "\n".join(lines + [""] + pictures) + "\n"
 
 
 def fmt(value):
@@ -109,7 +150,11 @@ def main():
         body += "".join(f"\n![{name} plot {i}]({p})\n" for i, p in enumerate(plots))
         sections.append(f'<a id="{name}"></a>\n\n' + body)
     lines.append("")
-    report = "\n".join(lines) + "\n" + "\n".join(sections)
+    scenes = scene_section(out_dir)
+    table1 = out_dir / "table1" / "table1.md"
+    if table1.exists():
+        scenes += "\n" + table1.read_text()
+    report = "\n".join(lines) + "\n" + "\n".join(sections) + "\n" + scenes
     (out_dir / "README.md").write_text(report)
     return 0
 
