@@ -52,6 +52,10 @@ void echo(const Scene<Dim>& s, const RunSettings& settings, bool resumed) {
   fmt::print("  method      {}{}; {}; reseeding {}\n", to_string(o.transfer),
              o.transfer == PicTransfer::flip ? fmt::format(" (blend {})", o.flip) : "",
              o.integrator == Integrator::rk2 ? "RK2" : "RK3", o.reseed ? "on" : "off");
+  fmt::print("  surface     {}\n",
+             o.surface == PicSurface::air_cells
+                 ? std::string("p = 0 at the air cells' centres")
+                 : fmt::format("p = 0 at the particles' level set (radius {} h)", o.surface_radius));
   fmt::print("  ppe         {} to {:.1e}{}\n", linalg::to_string(o.solver.kind), o.solver.tolerance,
              o.continue_on_ppe_failure ? ", going on when it does not converge" : "");
   fmt::print("  gravity     ({}); solids {}; sources {}\n",
@@ -229,6 +233,9 @@ int main(int argc, char** argv) {
   run->add_option("--method", a.overrides.method,
                   "rbf, pic, flip or apic (pic, flip, apic run on a regular grid)")
       ->check(CLI::IsMember({"rbf", "pic", "flip", "apic"}));
+  run->add_option("--surface", a.overrides.surface,
+                  "air (p = 0 in the air cells) or levelset (p = 0 at the particles' level set)")
+      ->check(CLI::IsMember({"air", "levelset"}));
   auto* regular = run->add_flag("--regular", a.regular, "run on a regular grid at the finest level");
   run->add_flag("--adaptive", a.adaptive, "run on the adaptive tree (rbf only)")->excludes(regular);
   run->add_option("--finest", a.overrides.finest, "finest level (the coarse level moves with it)")
@@ -262,9 +269,9 @@ int main(int argc, char** argv) {
     if (!a.resume.empty())
       LIQUID_VERIFY(
           a.overrides.method.empty() && a.overrides.adaptive < 0 && a.overrides.finest < 0 &&
-              a.overrides.steps < 0 && a.overrides.until < 0,
+              a.overrides.steps < 0 && a.overrides.until < 0 && a.overrides.surface.empty(),
           "liquid run --resume continues the saved run as it was: --method, --regular, --adaptive, --finest, "
-          "--steps and --until are refused with it");
+          "--surface, --steps and --until are refused with it");
     LIQUID_VERIFY(a.checkpoint_every == 0 || !a.out.empty(),
                   "liquid run: --checkpoint-every needs an output folder (--out DIR)");
     int dim = 0;

@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 
 #include "liquid/core/error.hpp"
+#include "liquid/core/parallel.hpp"
 #include "liquid/mac/divergence.hpp"
 #include "liquid/transfer/extrapolate.hpp"
 #include "liquid/transfer/velocity_field.hpp"
@@ -34,6 +35,16 @@ PicTransfer parse_pic_transfer(const std::string& name) {
   throw Error(fmt::format("unknown transfer '{}' (choices: rbf, pic, flip, apic)", name));
 }
 
+const char* to_string(PicSurface surface) {
+  return surface == PicSurface::air_cells ? "air" : "levelset";
+}
+
+PicSurface parse_pic_surface(const std::string& name) {
+  if (name == "air") return PicSurface::air_cells;
+  if (name == "levelset") return PicSurface::levelset;
+  throw Error(fmt::format("unknown surface '{}' (choices: air, levelset)", name));
+}
+
 namespace {
 
 template <int Dim>
@@ -58,6 +69,8 @@ CellGraph<Dim> initial_graph(const PicOptions<Dim>& o) {
                 "PIC: transfer '{}' needs a uniform tree (adaptive = false); adaptive trees use rbf",
                 to_string(o.transfer));
   LIQUID_VERIFY(o.flip >= 0.0 && o.flip <= 1.0, "PIC: FLIP blend {} is outside [0, 1]", o.flip);
+  LIQUID_VERIFY(o.surface_radius > 0.0 && o.surface_radius < 2.0,
+                "PIC: surface radius {} (finest cells) is outside (0, 2)", o.surface_radius);
   return tree::uniform<Dim>(o.domain, o.adaptive ? o.coarse_level : o.fine_level, graph_options(o));
 }
 
@@ -66,7 +79,7 @@ CellGraph<Dim> initial_graph(const PicOptions<Dim>& o) {
 template <int Dim>
 AdaptivePic<Dim>::AdaptivePic(const PicOptions<Dim>& options)
     : options_(options), graph_(initial_graph(options)) {
-  if (!options_.adaptive) lattice_ = std::make_unique<RegularLattice<Dim>>(graph_);
+  if (options_.transfer != PicTransfer::rbf) lattice_ = std::make_unique<RegularLattice<Dim>>(graph_);
   if (options_.transfer == PicTransfer::apic) apic_field_ = particles_.add_field("apic", Dim * Dim);
   u_.assign(graph_.face_capacity(), 0.0);
   known_.assign(graph_.face_capacity(), 1);
@@ -168,7 +181,7 @@ void AdaptivePic<Dim>::restore(const PicState<Dim>& s) {
       "PIC: the saved particle fields are incomplete");
   graph_ = std::move(graph);
   lattice_.reset();
-  if (!options_.adaptive) lattice_ = std::make_unique<RegularLattice<Dim>>(graph_);
+  if (options_.transfer != PicTransfer::rbf) lattice_ = std::make_unique<RegularLattice<Dim>>(graph_);
   particles_.resize(static_cast<int>(n));
   for (std::size_t i = 0; i < n; ++i)
     for (int d = 0; d < Dim; ++d) {
@@ -349,14 +362,54 @@ void AdaptivePic<Dim>::assemble(double dt) {
   mac::PoissonProblem<Dim> problem;
   problem.f_cells.assign(graph_.cell_capacity(), 0.0);
   problem.boundary.unknown_cells.assign(graph_.cell_capacity(), 0);
-  for (CellId c : cls_.fluid) {
-    problem.f_cells[c] = div[c] / dt;
-    problem.boundary.unknown_cells[c] = 1;
+  if (options_.surface == PicSurface::levelset) {
+    // Unknowns where the particles' level set is negative: the fluid cells and the air cells next
+    // to them, by the sign at their centres; the PPE cuts every edge leaving them at its zero set.
+    surface_ = std::make_unique<pic::ParticleSurface<Dim>>(graph_, cls_, particles_.x, options_.fine_level,
+                                                           options_.surface_radius);
+    std::vector<std::uint8_t> seen(graph_.cell_capacity(), 0);
+    const auto consider = [&](CellId c) {
+      if (seen[c] || cls_.is_solid(c)) return;
+      seen[c] = 1;
+      if ((*surface_)(graph_.centre(c)) < 0.0) problem.boundary.unknown_cells[c] = 1;
+    };
+    // Two hops out, so that no unknown has a neighbour with a negative centre left outside (the
+    // PPE needs a sign change on every edge it cuts).
+    std::vector<CellId> ring;
+    for (CellId c : cls_.fluid) {
+      graph_.k_ring(c, 2, ring);
+      for (CellId n : ring) consider(n);
+    }
+    graph_.for_each_cell([&](CellId c) {
+      if (problem.boundary.unknown_cells[c]) problem.f_cells[c] = div[c] / dt;
+    });
+    // Every solid cell is an unknown (decoupled by fold_solid_rows()), and the level set is
+    // negative inside the solid, so that each edge the PPE cuts has a sign change on it: a solid
+    // cell left outside had none towards its solid neighbours (measured: dam-break-obstacles-3d).
+    if (!solid_.empty()) {
+      graph_.for_each_cell([&](CellId c) {
+        if (cls_.is_solid(c)) problem.boundary.unknown_cells[c] = 1;
+      });
+      problem.boundary.levelset = [s = surface_.get(), solid = options_.solid](const Vec<Dim>& x) {
+        return solid(x) < 0.0 ? -s->support() : (*s)(x);
+      };
+    } else {
+      problem.boundary.levelset = [s = surface_.get()](const Vec<Dim>& x) { return (*s)(x); };
+    }
+  } else {
+    surface_.reset();
+    for (CellId c : cls_.fluid) {
+      problem.f_cells[c] = div[c] / dt;
+      problem.boundary.unknown_cells[c] = 1;
+    }
   }
   // Solid cells within two face hops of the liquid are unknowns too, so that no row sees them as
   // air (p = 0); fold_solid_rows() then decouples them.
   if (!solid_.empty()) {
-    std::vector<CellId> frontier(cls_.fluid.begin(), cls_.fluid.end()), next;
+    std::vector<CellId> frontier, next;
+    graph_.for_each_cell([&](CellId c) {
+      if (problem.boundary.unknown_cells[c]) frontier.push_back(c);
+    });
     for (int hop = 0; hop < 2; ++hop) {
       next.clear();
       for (CellId c : frontier)
@@ -419,12 +472,38 @@ void AdaptivePic<Dim>::fold_solid_rows() {
 }
 
 template <int Dim>
+void AdaptivePic<Dim>::interface_gradients(double, std::vector<double>& dn) const {
+  // A face between an unknown and a cell outside the liquid: the ghost-fluid gradient from p = 0
+  // at the interface crossing, dp/dn = (0 - p_in) / (theta d) towards the outside (Gibou et al.
+  // 2002), d the distance between the centres along the axis. Second order in the surface position.
+  const auto& layout = system_.layout;
+  const linalg::Vector& p = system_.b;
+  graph_.for_each_face([&](FaceId f) {
+    const GraphFace& g = graph_.face(f);
+    if (g.is_boundary() || std::isfinite(dn[f]) || cls_.solid_face(g)) return;
+    const int i0 = layout.dof_of_cell[g.cell[0]], i1 = layout.dof_of_cell[g.cell[1]];
+    if ((i0 >= 0) == (i1 >= 0)) return;
+    const int in = i0 >= 0 ? 0 : 1;
+    const Vec<Dim> a = graph_.centre(g.cell[in]), b = graph_.centre(g.cell[1 - in]);
+    const double phi_a = system_.boundary.levelset(a), phi_b = system_.boundary.levelset(b);
+    const auto cut = levelset::crossing<Dim>(system_.boundary.levelset, a, b, phi_a, phi_b);
+    const double theta = cut ? std::max(cut->theta, 1e-3) : 1.0;
+    const double d = std::abs(b[g.axis] - a[g.axis]);
+    const double p_in = p[in == 0 ? i0 : i1];
+    // Along +axis: from cell[0] to cell[1].
+    const double towards_outside = (0.0 - p_in) / (theta * d);
+    dn[f] = in == 0 ? towards_outside : -towards_outside;
+  });
+}
+
+template <int Dim>
 void AdaptivePic<Dim>::extend_into_solid(linalg::Vector& x) const {
   // Two Jacobi sweeps of the mean over liquid (then already extended) face neighbours: the solid
   // unknowns that gradient stencils of liquid faces may reach carry the liquid's pressure.
   const auto& layout = system_.layout;
   std::vector<std::uint8_t> set(graph_.cell_capacity(), 0);
-  for (CellId c : cls_.fluid) set[c] = 1;
+  for (long i = 0; i < system_.n_unknowns(); ++i)
+    if (!cls_.is_solid(layout.cell_of_dof[i])) set[layout.cell_of_dof[i]] = 1;
   for (int sweep = 0; sweep < 2; ++sweep) {
     std::vector<std::pair<long, double>> update;
     for (long i = 0; i < system_.n_unknowns(); ++i) {
@@ -465,8 +544,8 @@ void AdaptivePic<Dim>::solve_pressure(PicStepReport& r) {
 
 template <int Dim>
 void AdaptivePic<Dim>::project(double dt) {
-  const std::vector<double> dn =
-      mac::face_normal_derivative<Dim>(graph_, system_, options_.poisson, system_.b);
+  std::vector<double> dn = mac::face_normal_derivative<Dim>(graph_, system_, options_.poisson, system_.b);
+  if (surface_) interface_gradients(dt, dn);
   graph_.for_each_face([&](FaceId f) {
     const GraphFace& g = graph_.face(f);
     if (g.is_boundary() || cls_.solid_face(g)) {
@@ -474,7 +553,9 @@ void AdaptivePic<Dim>::project(double dt) {
       known_[f] = 1;
       return;
     }
-    const bool wet = cls_.wet(g);
+    // Air-cell surface: the faces next to fluid cells. Level-set surface: the faces next to an
+    // unknown, whose gradient mac or interface_gradients() gave.
+    const bool wet = surface_ ? std::isfinite(dn[f]) : cls_.wet(g);
     known_[f] = wet;
     if (wet) u_[f] -= dt * dn[f];
   });
@@ -495,7 +576,21 @@ void AdaptivePic<Dim>::to_particles(PicStepReport& r) {
     if (options_.transfer == PicTransfer::apic) affine = particles_.field(apic_field_);
     r.g2p = linear_to_points<Dim>(*lattice_, u_, particles_.x, grid, affine);
   } else {
-    r.g2p = faces_to_points<Dim>(graph_, u_, known_, particles_.x, bins_, options_.rbf, grid);
+    // One RBF field serves g2p and the advection after it: each cell's interpolants are factorised
+    // once a step instead of twice (the same stencils and values as faces_to_points).
+    std::vector<CellId> cells;  // where particles are, and one ring around
+    std::vector<std::uint8_t> seen(graph_.cell_capacity(), 0);
+    std::vector<CellId> ring;
+    for (CellId c : cls_.fluid) {
+      graph_.k_ring(c, 1, ring);
+      for (CellId q : ring)
+        if (!seen[q]) seen[q] = 1, cells.push_back(q);
+    }
+    std::sort(cells.begin(), cells.end());
+    field_ = std::make_unique<FaceVelocityField<Dim>>(graph_, u_, known_, options_.rbf, cells);
+    parallel_for(
+        static_cast<long>(n), [&](long i) { grid[i] = (*field_)(particles_.x[i]); }, 1024);
+    r.g2p.targets = static_cast<long>(n) * Dim;
   }
   if (options_.transfer == PicTransfer::flip) {
     std::vector<double> du(u_.size());
@@ -533,16 +628,7 @@ void AdaptivePic<Dim>::advect(double dt, PicStepReport& r) {
   if (lattice_) {
     run(FaceVelocityField<Dim>(graph_, *lattice_, u_));
   } else {
-    std::vector<CellId> cells;  // where particles are, and one ring around
-    std::vector<std::uint8_t> seen(graph_.cell_capacity(), 0);
-    std::vector<CellId> ring;
-    for (CellId c : cls_.fluid) {
-      graph_.k_ring(c, 1, ring);
-      for (CellId q : ring)
-        if (!seen[q]) seen[q] = 1, cells.push_back(q);
-    }
-    std::sort(cells.begin(), cells.end());
-    run(FaceVelocityField<Dim>(graph_, u_, known_, options_.rbf, cells));
+    run(*field_);  // built by g2p from the same face velocities
   }
   rebin<Dim>(graph_, particles_.x, bins_);
   check_particles("advect");

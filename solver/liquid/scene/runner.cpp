@@ -57,6 +57,7 @@ void apply_overrides(const SceneOverrides& o, Scene<Dim>& scene) {
     if (p.transfer != PicTransfer::rbf) p.adaptive = false;
   }
   if (o.adaptive >= 0) p.adaptive = o.adaptive == 1;
+  if (!o.surface.empty()) p.surface = parse_pic_surface(o.surface);
   LIQUID_VERIFY(!p.adaptive || p.transfer == PicTransfer::rbf,
                 "method '{}' runs on a regular grid only; drop --adaptive or use --method rbf",
                 to_string(p.transfer));
@@ -216,6 +217,7 @@ std::string SceneRunner<Dim>::checkpoint() {
   w.put_scalar("overrides/finest", static_cast<std::int64_t>(o.finest));
   w.put_scalar("overrides/steps", static_cast<std::int64_t>(o.steps));
   w.put_scalar("overrides/until", o.until);
+  w.put_string("overrides/surface", o.surface.empty() ? "-" : o.surface);
   w.put_scalar("run/checkpoint_every", static_cast<std::int64_t>(settings_.checkpoint_every));
 
   const CellGraphState<Dim>& gs = st.graph;
@@ -272,6 +274,7 @@ SceneRunner<Dim> SceneRunner<Dim>::resume(const std::string& checkpoint, RunSett
   o.finest = static_cast<int>(r.scalar_int("overrides/finest"));
   o.steps = r.scalar_int("overrides/steps");
   o.until = r.scalar_double("overrides/until");
+  o.surface = r.string("overrides/surface") == "-" ? "" : r.string("overrides/surface");
   if (settings.checkpoint_every == 0) settings.checkpoint_every = r.scalar_int("run/checkpoint_every");
   LIQUID_VERIFY(std::filesystem::is_regular_file(settings.scene_path),
                 "{}: its scene file {} is gone; a checkpoint needs the scene it was made from", checkpoint,

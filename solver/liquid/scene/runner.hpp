@@ -27,11 +27,12 @@ namespace liquid {
 /// How a run differs from its scene file (the command line's overrides), kept in checkpoints so
 /// that a resumed run rebuilds the same solver.
 struct SceneOverrides {
-  std::string method;  ///< "" keeps the scene's; a method other than rbf also sets adaptive = false
-  int adaptive = -1;   ///< -1 keeps the scene's; 0 regular grid; 1 adaptive tree
-  int finest = -1;     ///< -1 keeps the scene's; else the finest level (the coarse level shifts with it)
-  long steps = -1;     ///< -1 keeps the scene's end; else a step count
-  double until = -1;   ///< < 0 keeps the scene's end; else the end time
+  std::string method;   ///< "" keeps the scene's; a method other than rbf also sets adaptive = false
+  int adaptive = -1;    ///< -1 keeps the scene's; 0 regular grid; 1 adaptive tree
+  int finest = -1;      ///< -1 keeps the scene's; else the finest level (the coarse level shifts with it)
+  long steps = -1;      ///< -1 keeps the scene's end; else a step count
+  double until = -1;    ///< < 0 keeps the scene's end; else the end time
+  std::string surface;  ///< "" keeps the scene's; else "air" or "levelset"
 };
 
 /// 2 or 3: the dimension of the run saved in a checkpoint file.

@@ -332,9 +332,9 @@ Scene<Dim> load_scene(const std::string& path) {
   }
   {
     const toml::table* t = top.table("solver");
-    const TableReader r(
-        t ? *t : empty, path, "solver",
-        {"method", "adaptive", "flip", "integrator", "reseed", "gravity", "extrapolation", "advect_cfl"});
+    const TableReader r(t ? *t : empty, path, "solver",
+                        {"method", "adaptive", "flip", "integrator", "reseed", "gravity", "extrapolation",
+                         "advect_cfl", "surface", "surface_radius"});
     o.transfer = parse_pic_transfer(r.choice("method", {"rbf", "pic", "flip", "apic"}, std::string("rbf")));
     o.adaptive = r.boolean("adaptive", o.transfer == PicTransfer::rbf);
     LIQUID_VERIFY(
@@ -349,6 +349,10 @@ Scene<Dim> load_scene(const std::string& path) {
     o.gravity = r.vec<Dim>("gravity", PicOptions<Dim>::default_gravity());
     o.extrapolation_layers = static_cast<int>(r.integer_in("extrapolation", 1, 64, 4));
     o.advect_cfl = r.positive("advect_cfl", 1.0);
+    o.surface = parse_pic_surface(r.choice("surface", {"air", "levelset"}, std::string("air")));
+    o.surface_radius = r.positive("surface_radius", o.surface_radius);
+    LIQUID_VERIFY(o.surface_radius < 2.0, "{}: {} finest cells is too wide (below 2)",
+                  r.where("surface_radius"), o.surface_radius);
   }
   {
     const toml::table* t = top.table("time");

@@ -278,3 +278,34 @@ TEST(AdaptivePic, RestoredSolverTakesTheSameStepsBitForBit) {
 
 }  // namespace
 }  // namespace liquid
+
+namespace liquid {
+namespace {
+
+TEST(AdaptivePic, LevelSetSurfaceHalvesThePoolsPressureError) {
+  // The second-order surface at the particles' level set against the air cells' p = 0 at their
+  // centres (half a cell above the surface): the pressure error must drop below half the air
+  // cells'. Its price, measured: the particles' bumpy surface drives spurious currents of about
+  // 1.3% of sqrt(gH) (air cells: round-off); bounded here at 2%.
+  double error[2] = {0.0, 0.0}, speed[2] = {0.0, 0.0};
+  for (int k = 0; k < 2; ++k) {
+    PicOptions<2> o;
+    o.fine_level = 6;
+    o.coarse_level = 3;
+    if (k == 1) o.surface = PicSurface::levelset;
+    AdaptivePic<2> sim(o);
+    sim.seed(levelset::box<2>({Vec<2>::Zero(), Vec<2>(1.0, 0.5)}));
+    for (int s = 0; s < 50; ++s) {
+      ASSERT_TRUE(sim.advance(0.01).ppe.converged());
+      for (const auto& v : sim.particles().v) speed[k] = std::max(speed[k], v.norm());
+    }
+    for (CellId c : sim.classification().fluid)
+      error[k] = std::max(error[k], std::abs(sim.pressure()[c] - 9.81 * (0.5 - sim.graph().centre(c)[1])));
+  }
+  EXPECT_LT(error[1], 0.5 * error[0]) << "air cells " << error[0] << ", level set " << error[1];
+  EXPECT_LT(speed[1], 2e-2 * std::sqrt(9.81 * 0.5));
+  EXPECT_LT(speed[0], 1e-8);
+}
+
+}  // namespace
+}  // namespace liquid

@@ -2,14 +2,15 @@
 //
 // Problem. Each scene of solver/scenes (2D at finest level 5, 3D at 3, the coarse level shifted
 // with it) runs 6 steps through SceneRunner, as `liquid run` does, with its frames written to a
-// temporary folder; the 2D scenes run a second time with the regular APIC baseline. A NaN, a PPE
-// that does not converge or a refused state stops the run: the case records it as a failure.
+// temporary folder; the 2D scenes run again with the regular APIC baseline, and with the
+// level-set surface (p = 0 at the particles' level set). A NaN, a PPE that does not converge or a
+// refused state stops the run: the case records it as a failure.
 // Measured: the fluid volume (sum of fluid cell volumes) and the particle count after 6 steps
 // against the start; the phases timed; the frames written.
 // Expected: no failure; the volume changes by at most the volume of the surface cells (a free
-// surface moving across a coarse grid changes the cell count by a layer; sources only add); every phase of
-// the step timed once per step (grid on adaptive trees only, sources only in scenes with sources); at least
-// two frames.
+// surface moving across a coarse grid changes the cell count by a layer; sources only add); every
+// phase of the step timed once per step (grid on adaptive trees only, sources only in scenes with
+// sources); at least two frames.
 
 #include <filesystem>
 
@@ -40,23 +41,26 @@ double surface_volume(const AdaptivePic<Dim>& sim) {
 }
 
 template <int Dim>
-void smoke(const std::string& name, const std::string& method, Table& table, CaseResult& result) {
+void smoke(const std::string& name, const std::string& method, Table& table, CaseResult& result,
+           const std::string& surface = "") {
   const std::string path = find_scene(name);
   Scene<Dim> scene = load_scene<Dim>(path);
   SceneOverrides o;
   o.finest = Dim == 2 ? 5 : 3;
   o.steps = kSteps;
   o.method = method;
+  o.surface = surface;
+  const std::string label = surface.empty() ? method : method + "-" + surface;
   apply_overrides<Dim>(o, scene);
   RunSettings settings;
   settings.out =
-      (std::filesystem::temp_directory_path() / "liquid-scene-smoke" / (name + "-" + method)).string();
+      (std::filesystem::temp_directory_path() / "liquid-scene-smoke" / (name + "-" + label)).string();
   std::filesystem::remove_all(settings.out);
   settings.overrides = o;
   settings.scene_path = path;
   const bool sources = !scene.pic.sources.empty();
   const bool adaptive = scene.pic.adaptive;
-  const std::string key = fmt::format("{} {}", name, method);
+  const std::string key = fmt::format("{} {}", name, label);
   try {
     SceneRunner<Dim> run(std::move(scene), settings);
     const double v0 = fluid_volume(run.solver());
@@ -80,7 +84,7 @@ void smoke(const std::string& name, const std::string& method, Table& table, Cas
                     fmt::format("{}: phase {} timed {} times in {} steps", key, p,
                                 it == e.end() ? 0 : it->second.calls, kSteps));
     }
-    table.add_row({long(Dim), name, method, long(s.steps), s.time, n0, n1, change, layer, long(timed),
+    table.add_row({long(Dim), name, label, long(s.steps), s.time, n0, n1, change, layer, long(timed),
                    long(expected), long(run.n_frames()), s.seconds.at("total")});
     result.expect(
         sources ? change >= -layer : std::abs(change) <= layer,
@@ -92,7 +96,7 @@ void smoke(const std::string& name, const std::string& method, Table& table, Cas
         {key + " volume change", GateFigure::Kind::error, std::max(std::abs(change), 1e-6)});
   } catch (const Error& e) {
     result.expect(false, fmt::format("{}: {}", key, e.what()));
-    table.add_row({long(Dim), name, method, 0L, 0.0, 0L, 0L, 0.0, 0.0, 0L, 0L, 0L, 0.0});
+    table.add_row({long(Dim), name, label, 0L, 0.0, 0L, 0L, 0.0, 0.0, 0L, 0L, 0L, 0.0});
   }
 }
 
@@ -105,6 +109,7 @@ CaseResult run(const CaseOptions&) {
     if (scene_dimension(find_scene(name)) == 2) {
       smoke<2>(name, "rbf", table, result);
       smoke<2>(name, "apic", table, result);
+      smoke<2>(name, "rbf", table, result, "levelset");
     } else {
       smoke<3>(name, "rbf", table, result);
     }
