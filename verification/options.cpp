@@ -22,9 +22,11 @@ std::map<std::string, E> names_of(std::initializer_list<E> values) {
   for (E v : values) out.emplace(to_string(v), v);
   return out;
 }
-const std::map<std::string, linalg::SolverKind> solver_names =
-    names_of({linalg::SolverKind::bicgstab_jacobi, linalg::SolverKind::bicgstab_ilut,
-              linalg::SolverKind::cg_ic, linalg::SolverKind::cg_jacobi, linalg::SolverKind::direct});
+const std::map<std::string, linalg::SolverKind> solver_names = [] {
+  std::map<std::string, linalg::SolverKind> out;
+  for (const std::string& name : linalg::solver_names()) out.emplace(name, linalg::parse_solver(name));
+  return out;
+}();
 const std::map<std::string, mac::StencilRule> stencil_names =
     names_of({mac::StencilRule::nearest, mac::StencilRule::face_grown, mac::StencilRule::ring});
 const std::map<std::string, RowProtocol> row_names = names_of({RowProtocol::refine, RowProtocol::rebuild});

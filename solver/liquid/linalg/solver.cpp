@@ -6,6 +6,7 @@
 
 #include "liquid/core/error.hpp"
 #include "liquid/core/timer.hpp"
+#include "liquid/linalg/amg.hpp"
 
 namespace liquid::linalg {
 
@@ -18,7 +19,10 @@ constexpr Named kNames[] = {{"bicgstab-jacobi", SolverKind::bicgstab_jacobi},
                             {"bicgstab-ilut", SolverKind::bicgstab_ilut},
                             {"cg-ic", SolverKind::cg_ic},
                             {"cg-jacobi", SolverKind::cg_jacobi},
-                            {"direct", SolverKind::direct}};
+                            {"direct", SolverKind::direct},
+                            {"bicgstab-amg", SolverKind::bicgstab_amg},
+                            {"gmres-amg", SolverKind::gmres_amg},
+                            {"cg-amg", SolverKind::cg_amg}};
 }  // namespace
 
 std::vector<std::string> solver_names() {
@@ -55,8 +59,9 @@ const char* to_string(SolveInfo info) {
 
 std::string SolveStats::describe() const {
   return fmt::format(
-      "{} {}: {} unknowns, {} iterations, relative residual {:.3e}, setup {:.3f} s, solve {:.3f} s", solver,
-      to_string(info), n_unknowns, iterations, relative_residual, setup_seconds, solve_seconds);
+      "{} {}: {} unknowns, {} iterations, relative residual {:.3e}, setup {:.3f} s, solve {:.3f} s{}", solver,
+      to_string(info), n_unknowns, iterations, relative_residual, setup_seconds, solve_seconds,
+      note.empty() ? "" : " (" + note + ")");
 }
 
 namespace {
@@ -129,6 +134,25 @@ class Iterative final : public LinearSolver {
   SolveOptions options_;
 };
 
+/// The AMG solvers on one process: every row on this rank (see amg.hpp for the distributed call).
+class Amg final : public LinearSolver {
+ public:
+  explicit Amg(SolveOptions options) : options_(options) {}
+  SolveStats solve(const SparseMatrix& A, const Vector& b, Vector& x) override {
+    LIQUID_VERIFY(A.rows() == A.cols() && A.rows() == b.size(),
+                  "{}: matrix {}x{} and right-hand side {} differ", to_string(options_.kind), A.rows(),
+                  A.cols(), b.size());
+    LIQUID_VERIFY(mpi_size() == 1,
+                  "{}: {} MPI ranks share this solve; a distributed solve passes each rank's rows to "
+                  "amg_solve_rows()",
+                  to_string(options_.kind), mpi_size());
+    return amg_solve_rows(A, b, x, 0, A.rows(), options_);
+  }
+
+ private:
+  SolveOptions options_;
+};
+
 class Direct final : public LinearSolver {
  public:
   SolveStats solve(const SparseMatrix& A, const Vector& b, Vector& x) override {
@@ -186,6 +210,10 @@ std::unique_ptr<LinearSolver> make_solver(const SolveOptions& options) {
           Iterative<Eigen::ConjugateGradient<SparseMatrix, Eigen::Lower | Eigen::Upper, Jacobi>>>(options);
     case SolverKind::direct:
       return std::make_unique<Direct>();
+    case SolverKind::bicgstab_amg:
+    case SolverKind::gmres_amg:
+    case SolverKind::cg_amg:
+      return std::make_unique<Amg>(options);
   }
   throw Error("unknown solver kind");
 }

@@ -82,11 +82,72 @@ TEST(LinearSolvers, SingularSystemIsNotReportedAsConverged) {
   SparseMatrix A(n, n);
   A.setFromTriplets(t.begin(), t.end());
   const Vector b = Vector::Ones(n);  // not in the range of A
-  for (SolverKind kind : {SolverKind::bicgstab_jacobi, SolverKind::cg_jacobi, SolverKind::direct}) {
+  for (SolverKind kind : {SolverKind::bicgstab_jacobi, SolverKind::cg_jacobi, SolverKind::direct,
+                          SolverKind::bicgstab_amg, SolverKind::gmres_amg, SolverKind::cg_amg}) {
     Vector x;
     const SolveStats st = solve(A, b, x, {kind, 1e-10, 500});
     EXPECT_FALSE(st.converged()) << st.describe();
   }
+}
+
+// The AMG solvers: iterations independent of the grid; a non-symmetric matrix (an upwinded
+// convection term, like the RBF-FD rows' asymmetry) solved by BiCGSTAB and GMRES; bad matrices
+// reported, never an abort inside hypre.
+TEST(AmgSolvers, IterationsStayFlatAsTheGridIsRefined) {
+  for (SolverKind kind : {SolverKind::bicgstab_amg, SolverKind::gmres_amg, SolverKind::cg_amg}) {
+    std::vector<int> iterations;
+    for (int n : {16, 32, 64, 128}) {
+      const SparseMatrix A = poisson(n);
+      const Vector b = Vector::Ones(A.rows());
+      Vector x;
+      const SolveStats st = solve(A, b, x, {kind, 1e-8, 500});
+      ASSERT_TRUE(st.converged()) << st.describe();
+      iterations.push_back(st.iterations);
+    }
+    // Jacobi-BiCGSTAB's count doubles with each halving of h; AMG's must not grow by 30%.
+    EXPECT_LE(iterations.back(), 1.3 * iterations.front() + 1)
+        << to_string(kind) << ": " << iterations.front() << " -> " << iterations.back();
+  }
+}
+
+TEST(AmgSolvers, NonSymmetricMatrixConverges) {
+  const int n = 48;
+  SparseMatrix A = poisson(n);
+  for (int i = 0; i < n; ++i)
+    for (int j = 1; j < n; ++j) A.coeffRef(i * n + j, i * n + j - 1) -= 0.8;  // upwind convection
+  for (int k = 0; k < A.rows(); ++k) A.coeffRef(k, k) += 0.8;
+  const Vector x_exact = Vector::LinSpaced(A.rows(), 0.0, 1.0);
+  const Vector b = A * x_exact;
+  for (SolverKind kind : {SolverKind::bicgstab_amg, SolverKind::gmres_amg}) {
+    Vector x;
+    const SolveStats st = solve(A, b, x, {kind, 1e-10, 500});
+    EXPECT_TRUE(st.converged()) << st.describe();
+    EXPECT_LE(st.relative_residual, 1e-10);
+    EXPECT_LT((x - x_exact).lpNorm<Eigen::Infinity>(), 1e-7);
+  }
+}
+
+TEST(AmgSolvers, BadMatricesAreReportedNotAborted) {
+  SparseMatrix A = poisson(8);
+  Vector b = Vector::Ones(A.rows()), x;
+  SparseMatrix nan = A;
+  nan.coeffRef(5, 5) = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_EQ(solve(nan, b, x, {SolverKind::bicgstab_amg, 1e-8, 100}).info, SolveInfo::non_finite);
+  SparseMatrix zero_row = A;
+  for (SparseMatrix::InnerIterator it(zero_row, 7); it; ++it) it.valueRef() = 0.0;
+  const SolveStats z = solve(zero_row, b, x, {SolverKind::gmres_amg, 1e-8, 100});
+  EXPECT_EQ(z.info, SolveInfo::setup_failed) << z.describe();
+  // An all-zero right-hand side: x = 0 at once (hypre would divide by |b|).
+  x = Vector::Ones(A.rows());
+  const SolveStats zero_b = solve(A, Vector::Zero(A.rows()), x, {SolverKind::cg_amg, 1e-8, 100});
+  EXPECT_TRUE(zero_b.converged());
+  EXPECT_EQ(x.norm(), 0.0);
+  // The initial guess is used: starting from the solution takes no iteration.
+  const Vector x_exact = Vector::LinSpaced(A.rows(), -1.0, 1.0);
+  x = x_exact;
+  const SolveStats warm = solve(A, A * x_exact, x, {SolverKind::bicgstab_amg, 1e-8, 100});
+  EXPECT_TRUE(warm.converged());
+  EXPECT_EQ(warm.iterations, 0);
 }
 
 }  // namespace
