@@ -1,7 +1,9 @@
 // Pressure Poisson assembly on non-graded octrees (jump 2), with and without the RBF-FD weight
-// cache (PoissonOptions::cache_weights), polynomial degree 2 and 3.
+// cache (PoissonOptions::cache_weights), polynomial degree 2 and 3; and the PPE solvers on 2D
+// matrices (BM_PpeSolve).
 //
 //   liquid-bench --benchmark_filter=PoissonAssembly
+//   liquid-bench --benchmark_filter=PpeSolve
 //
 // Args: cache (0 off, 1 on); degree; scene: 0 a band around a sphere (the poisson-neumann-3d
 // tree: T-junction layouts vary along the curved band), 1 a band around a plane (a still pool's
@@ -13,6 +15,7 @@
 #include <cmath>
 
 #include "liquid/levelset/levelset.hpp"
+#include "liquid/linalg/solver.hpp"
 #include "liquid/mac/poisson.hpp"
 #include "liquid/tree/builders.hpp"
 
@@ -52,6 +55,49 @@ void BM_PoissonAssembly(benchmark::State& state) {
 BENCHMARK(BM_PoissonAssembly)
     ->ArgNames({"cache", "degree", "scene"})
     ->ArgsProduct({{0, 1}, {2, 3}, {0, 1}})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
+// BM_PpeSolve/solver/tree/level: one solve (setup included) of the 2D Neumann PPE of
+// poisson-neumann-2d (p = cos x cos y - 1 on [0, pi]^2, pinned), tolerance 1e-8, from zero.
+// solver: 0 bicgstab-ilut (the default), 1 bicgstab-amg, 2 gmres-amg, 3 cg-amg (uniform only);
+// tree: 0 uniform at `level`, 1 a band around a circle at `level`, level - 2 elsewhere (cg-amg on
+// the uniform tree only: it needs a symmetric matrix). The first AMG solve of a process also starts
+// MPI (about 0.3 s): run with --benchmark_min_time large enough to repeat.
+// Counters: unknowns, iterations.
+void BM_PpeSolve(benchmark::State& state) {
+  const linalg::SolverKind kinds[] = {linalg::SolverKind::bicgstab_ilut, linalg::SolverKind::bicgstab_amg,
+                                      linalg::SolverKind::gmres_amg, linalg::SolverKind::cg_amg};
+  const auto kind = kinds[state.range(0)];
+  const bool adaptive = state.range(1) != 0;
+  const int level = static_cast<int>(state.range(2));
+  const Box<2> domain{Vec<2>::Zero(), Vec<2>::Constant(M_PI)};
+  const CellGraph<2> g =
+      adaptive ? tree::narrow_band<2>(domain, levelset::sphere<2>(Vec<2>::Constant(0.5 * M_PI), 0.9),
+                                      level - 2, level, 2.0)
+               : tree::uniform<2>(domain, level);
+  mac::PoissonProblem<2> problem;
+  problem.f = [](const Vec<2>& x) { return -2.0 * std::cos(x[0]) * std::cos(x[1]); };
+  problem.pin_value = [](const Vec<2>& x) { return std::cos(x[0]) * std::cos(x[1]) - 1.0; };
+  const auto sys = mac::assemble_poisson<2>(g, problem, mac::PoissonOptions{});
+  linalg::SolveStats stats;
+  for (auto _ : state) {
+    linalg::Vector x;
+    stats = linalg::solve(sys.A, sys.b, x, {kind, 1e-8, 20000});
+    benchmark::DoNotOptimize(x.data());
+  }
+  if (!stats.converged()) state.SkipWithError(stats.describe().c_str());
+  state.counters["unknowns"] = static_cast<double>(sys.n_unknowns());
+  state.counters["iterations"] = stats.iterations;
+}
+BENCHMARK(BM_PpeSolve)
+    ->ArgNames({"solver", "tree", "level"})
+    ->Apply([](benchmark::internal::Benchmark* b) {
+      for (int solver = 0; solver < 4; ++solver)
+        for (int tree = 0; tree < 2; ++tree)
+          for (int level : {6, 7, 8})
+            if (solver != 3 || tree == 0) b->Args({solver, tree, level});
+    })
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 

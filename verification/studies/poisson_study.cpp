@@ -41,7 +41,7 @@ CellGraph<Dim> row_tree(const PoissonStudy<Dim>& study, const CellGraph<Dim>& fi
 }
 
 template <int Dim>
-PoissonRun solve_poisson(const CellGraph<Dim>& graph, const PoissonStudy<Dim>& study) {
+mac::PoissonProblem<Dim> poisson_problem(const PoissonStudy<Dim>& study) {
   mac::PoissonProblem<Dim> problem;
   problem.f = study.laplacian;
   problem.boundary.levelset = study.levelset;
@@ -55,7 +55,32 @@ PoissonRun solve_poisson(const CellGraph<Dim>& graph, const PoissonStudy<Dim>& s
       return gradient(x).dot(n);
     };
   }
-  const mac::PoissonSystem<Dim> system = mac::assemble_poisson<Dim>(graph, problem, study.discretisation);
+  return problem;
+}
+
+template <int Dim>
+double max_error(const CellGraph<Dim>& graph, const PoissonStudy<Dim>& study,
+                 const mac::PoissonSystem<Dim>& system, const linalg::Vector& x) {
+  const auto& cells = system.layout.cell_of_dof;
+  double shift = 0.0;
+  if (system.bordered) {
+    double volume = 0.0;
+    for (std::size_t i = 0; i < cells.size(); ++i) {
+      shift += graph.volume(cells[i]) * (x[i] - study.exact(graph.centre(cells[i])));
+      volume += graph.volume(cells[i]);
+    }
+    shift /= volume;
+  }
+  double e = 0.0;
+  for (std::size_t i = 0; i < cells.size(); ++i)
+    e = std::max(e, std::abs(x[i] - shift - study.exact(graph.centre(cells[i]))));
+  return e;
+}
+
+template <int Dim>
+PoissonRun solve_poisson(const CellGraph<Dim>& graph, const PoissonStudy<Dim>& study) {
+  const mac::PoissonSystem<Dim> system =
+      mac::assemble_poisson<Dim>(graph, poisson_problem<Dim>(study), study.discretisation);
 
   PoissonRun run;
   run.n_cells = graph.n_cells();
@@ -345,6 +370,12 @@ std::vector<PoissonRun> solve_rows(const PoissonStudy<Dim>& study, CaseResult& r
   return runs;
 }
 
+template mac::PoissonProblem<2> poisson_problem<2>(const PoissonStudy<2>&);
+template mac::PoissonProblem<3> poisson_problem<3>(const PoissonStudy<3>&);
+template double max_error<2>(const CellGraph<2>&, const PoissonStudy<2>&, const mac::PoissonSystem<2>&,
+                             const linalg::Vector&);
+template double max_error<3>(const CellGraph<3>&, const PoissonStudy<3>&, const mac::PoissonSystem<3>&,
+                             const linalg::Vector&);
 template std::vector<PoissonRun> solve_rows<2>(const PoissonStudy<2>&, CaseResult&, const std::string&,
                                                const std::function<void(int, const PoissonRun&)>&);
 template std::vector<PoissonRun> solve_rows<3>(const PoissonStudy<3>&, CaseResult&, const std::string&,

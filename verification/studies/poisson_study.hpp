@@ -96,4 +96,14 @@ std::vector<PoissonRun> solve_rows(const PoissonStudy<Dim>& study, CaseResult& r
 template <int Dim>
 PoissonRun solve_poisson(const CellGraph<Dim>& graph, const PoissonStudy<Dim>& study);
 
+/// The mac problem of a study: f, the interface and its values, the walls, the pin.
+template <int Dim>
+mac::PoissonProblem<Dim> poisson_problem(const PoissonStudy<Dim>& study);
+
+/// L-inf error of p over the unknowns of `system` for the solution x (the volume-weighted mean
+/// difference removed for zero-mean systems).
+template <int Dim>
+double max_error(const CellGraph<Dim>& graph, const PoissonStudy<Dim>& study,
+                 const mac::PoissonSystem<Dim>& system, const linalg::Vector& x);
+
 }  // namespace liquid::verification

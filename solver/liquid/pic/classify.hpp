@@ -39,6 +39,14 @@ struct Classification {
   }
 };
 
+/// The total volume of `cells` (e.g. Classification::fluid: the liquid's volume as the grid sees it).
+template <int Dim>
+double volume_of(const CellGraph<Dim>& graph, std::span<const CellId> cells) {
+  double v = 0.0;
+  for (CellId c : cells) v += graph.volume(c);
+  return v;
+}
+
 /// Classifies every cell from the particle bins; `solid` (per cell id, or empty for no solid) marks
 /// the solid cells.
 template <int Dim>

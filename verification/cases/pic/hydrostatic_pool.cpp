@@ -48,9 +48,7 @@ const char* const kPhases[] = {"classify", "grid",        "p2g", "forces", "lapl
 
 template <int Dim>
 double fluid_volume(const AdaptivePic<Dim>& sim) {
-  double v = 0.0;
-  for (CellId c : sim.classification().fluid) v += sim.graph().volume(c);
-  return v;
+  return pic::volume_of<Dim>(sim.graph(), sim.classification().fluid);
 }
 
 template <int Dim>

@@ -26,18 +26,14 @@ constexpr long kSteps = 6;
 
 template <int Dim>
 double fluid_volume(const AdaptivePic<Dim>& sim) {
-  double v = 0.0;
-  for (CellId c : sim.classification().fluid) v += sim.graph().volume(c);
-  return v;
+  return pic::volume_of<Dim>(sim.graph(), sim.classification().fluid);
 }
 
 /// The volume of one layer of surface cells: what a moving surface can add to or take from the
 /// cell-counted volume without any liquid being lost.
 template <int Dim>
 double surface_volume(const AdaptivePic<Dim>& sim) {
-  double v = 0.0;
-  for (CellId c : sim.classification().surface) v += sim.graph().volume(c);
-  return v;
+  return pic::volume_of<Dim>(sim.graph(), sim.classification().surface);
 }
 
 template <int Dim>

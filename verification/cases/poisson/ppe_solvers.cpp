@@ -1,0 +1,252 @@
+// Case ppe-solvers: every PPE solver on the paper's Poisson matrices, adaptive and uniform.
+//
+// Problem. The matrices of the paper's four Poisson studies (poisson-neumann-2d/3d: Neumann,
+// p = prod cos x_k - 1 on [0, pi]^d; poisson-dirichlet-levelset-2d/3d: p = 0 on a level set),
+// each row's non-graded tree as those cases build it, and for the Neumann studies the uniform grid
+// at the row's finest level (the regular solver's matrix: 5/7-point FD). Rows (base levels, quick /
+// full): Neumann 2D 5:7 / 5:8, 3D 3:4 / 3:5; Dirichlet 2D 7:9 / 7:10, 3D 4:5 / 4:6; uniform rows
+// up to 70k (quick) / 300k (full) unknowns.
+// Solvers: BiCGSTAB with Jacobi, ILUT and BoomerAMG, and GMRES+AMG on the adaptive matrices; CG
+// with Jacobi, IC and AMG, and BiCGSTAB+AMG on the uniform ones; the direct solver as the
+// reference up to 30k unknowns. Tolerances 1e-6 (the paper's) and 1e-10; in the quick tier the
+// Jacobi and IC solvers run at 1e-6 only.
+// Measured per solve: iterations, setup and solve seconds, SpMV-equivalents (setup + solve over the
+// time of one product with that matrix), the true relative residual, the L-inf error of p.
+// Expected: every AMG solve converges; BiCGSTAB+AMG's iterations are flat: the finest row within
+// 1.3 times the coarsest row's, per study, tree and tolerance (except the 3D adaptive Neumann
+// matrices, where they grow: reported, see below); at 1e-10 its error equals the direct solver's
+// to 3 significant digits. Printed beside the paper's comparison (Sec. 6): adaptive
+// BiCGSTAB+Jacobi against regular PCG+Jacobi (paper: 2.6x faster), adaptive BiCGSTAB+ILU against
+// regular PCG+IC (2.5x faster, 3x fewer iterations), and the same with AMG on both sides.
+
+#include <algorithm>
+#include <map>
+
+#include <fmt/format.h>
+
+#include "common/case.hpp"
+#include "liquid/core/timer.hpp"
+#include "liquid/tree/builders.hpp"
+#include "studies/paper_studies.hpp"
+#include "studies/poisson_study.hpp"
+
+namespace liquid::verification {
+namespace {
+
+using linalg::SolverKind;
+
+struct Job {
+  SolverKind kind;
+  double tolerance;
+};
+
+/// One solve's figures, kept for the flatness check and the paper's comparison.
+struct Solved {
+  linalg::SolveStats stats;
+  double error = 0.0, spmv_equivalents = 0.0;
+};
+
+/// Seconds of one product A x: the median of 5 timings of 10 products.
+double spmv_seconds(const linalg::SparseMatrix& A) {
+  const linalg::Vector x = linalg::Vector::Ones(A.cols());
+  linalg::Vector y(A.rows());
+  std::vector<double> t;
+  for (int k = 0; k < 5; ++k) {
+    Stopwatch w;
+    for (int j = 0; j < 10; ++j) y.noalias() = A * x;
+    t.push_back(w.seconds() / 10.0);
+  }
+  std::nth_element(t.begin(), t.begin() + 2, t.end());
+  return std::max(t[2], 1e-9);
+}
+
+std::vector<Job> jobs(int dim, bool uniform, bool full, long unknowns) {
+  std::vector<Job> out;
+  const auto both = [&](SolverKind k) {
+    out.push_back({k, 1e-6});
+    out.push_back({k, 1e-10});
+  };
+  const auto slow = [&](SolverKind k) {
+    out.push_back({k, 1e-6});
+    if (full) out.push_back({k, 1e-10});
+  };
+  if (uniform) {
+    slow(SolverKind::cg_jacobi);
+    slow(SolverKind::cg_ic);
+    both(SolverKind::cg_amg);
+    both(SolverKind::bicgstab_amg);
+  } else {
+    slow(SolverKind::bicgstab_jacobi);
+    if (dim == 2)
+      both(SolverKind::bicgstab_ilut);
+    else
+      slow(SolverKind::bicgstab_ilut);  // its 3D factorisation takes seconds
+    both(SolverKind::bicgstab_amg);
+    both(SolverKind::gmres_amg);
+  }
+  if (unknowns <= 30000 && (dim == 2 || full)) out.push_back({SolverKind::direct, 1e-10});
+  return out;
+}
+
+struct Key {
+  std::string study, tree;
+  SolverKind kind;
+  double tolerance;
+  auto operator<=>(const Key&) const = default;
+};
+using Results = std::map<Key, std::vector<std::pair<int, Solved>>>;  // by row level
+
+template <int Dim>
+void solve_tree(const std::string& name, const PoissonStudy<Dim>& study, const CellGraph<Dim>& graph,
+                const std::string& tree, int level, bool full, Table& table, Results& results) {
+  const mac::PoissonSystem<Dim> system =
+      mac::assemble_poisson<Dim>(graph, poisson_problem<Dim>(study), study.discretisation);
+  const double t_spmv = spmv_seconds(system.A);
+  for (const Job& job : jobs(Dim, tree == "uniform", full, system.n_unknowns())) {
+    linalg::Vector x;
+    linalg::SolveOptions o = study.solver;
+    o.kind = job.kind;
+    o.tolerance = job.tolerance;
+    Solved s;
+    s.stats = linalg::solve(system.A, system.b, x, o);
+    s.spmv_equivalents = (s.stats.setup_seconds + s.stats.solve_seconds) / t_spmv;
+    if (s.stats.converged()) s.error = max_error<Dim>(graph, study, system, x);
+    table.add_row({name, tree, long(level), system.n_unknowns(), s.stats.solver, job.tolerance,
+                   long(s.stats.iterations), s.stats.setup_seconds, s.stats.solve_seconds, s.spmv_equivalents,
+                   s.stats.relative_residual,
+                   s.stats.converged() ? Table::Cell(s.error) : Table::Cell(std::string("-")),
+                   std::string(linalg::to_string(s.stats.info))});
+    results[{name, tree, job.kind, job.tolerance}].emplace_back(level, s);
+  }
+}
+
+template <int Dim>
+void run_study(const std::string& name, PoissonStudy<Dim> study, int level_min, int level_max, bool uniform,
+               bool full, Table& table, Results& results) {
+  study.level_min = level_min;
+  CellGraphOptions<Dim> options;
+  options.max_jump = study.max_jump;
+  const CellGraph<Dim> first = study.make_tree(level_min, options);
+  const long uniform_limit = full ? 300000 : 70000;
+  for (int level = level_min; level <= level_max; ++level) {
+    const CellGraph<Dim> graph = level == level_min ? first : row_tree<Dim>(study, first, level, options);
+    solve_tree<Dim>(name, study, graph, "adaptive", level, full, table, results);
+    const int fine = graph.deepest_level();
+    if (uniform && std::ldexp(1.0, Dim * fine) <= double(uniform_limit)) {
+      CellGraphOptions<Dim> flat_options;
+      flat_options.max_jump = study.max_jump;
+      solve_tree<Dim>(name, study, tree::uniform<Dim>(study.domain, fine, flat_options), "uniform", level,
+                      full, table, results);
+    }
+  }
+}
+
+CaseResult run(const CaseOptions& options) {
+  CaseResult result;
+  const bool full = options.full;
+  Table table("every solver on every matrix",
+              {"study", "tree", "level", "unknowns", "solver", "tolerance", "iterations", "setup s",
+               "solve s", "SpMV-equiv", "residual", "L-inf err p", "result"});
+  Results results;
+  run_study<2>("neumann-2d", neumann_study<2>(full), 5, full ? 8 : 7, true, full, table, results);
+  run_study<3>("neumann-3d", neumann_study<3>(full), 3, full ? 5 : 4, true, full, table, results);
+  run_study<2>("dirichlet-2d", dirichlet_study<2>(full), 7, full ? 10 : 9, false, full, table, results);
+  run_study<3>("dirichlet-3d", dirichlet_study<3>(full), 4, full ? 6 : 5, false, full, table, results);
+
+  // Flat iterations and the direct solver's errors.
+  Table flat("AMG iterations, coarsest to finest row",
+             {"study", "tree", "solver", "tolerance", "iterations", "finest / coarsest"});
+  for (const auto& [key, rows] : results) {
+    const bool amg = key.kind == SolverKind::bicgstab_amg || key.kind == SolverKind::gmres_amg ||
+                     key.kind == SolverKind::cg_amg;
+    if (!amg) continue;
+    std::string its;
+    bool all = true;
+    for (const auto& [level, s] : rows) {
+      its += fmt::format("{}{}", its.empty() ? "" : " ", s.stats.iterations);
+      all = all && s.stats.converged();
+      result.expect(s.stats.converged(),
+                    fmt::format("{} {} level {}: {}", key.study, key.tree, level, s.stats.describe()));
+      const std::string fig = fmt::format("{} {} L{} {} {:.0e}", key.study, key.tree, level,
+                                          linalg::to_string(key.kind), key.tolerance);
+      result.gate.push_back({fig + " iterations", GateFigure::Kind::iterations, double(s.stats.iterations)});
+    }
+    const double ratio =
+        double(rows.back().second.stats.iterations) / std::max(1, rows.front().second.stats.iterations);
+    flat.add_row({key.study, key.tree, linalg::to_string(key.kind), key.tolerance, its, ratio});
+    // Measured and not yet mended (issue #18): on the 3D adaptive Neumann matrices BiCGSTAB+AMG
+    // takes 6, 9 and 11 iterations at levels 3, 4, 5 (1e-6), whatever the strength (0.25-0.6) and
+    // coarsening (HMIS, PMIS); the uniform 3D and the adaptive 3D Dirichlet rows stay flat. Reported
+    // as a warning there, asserted everywhere else.
+    const bool known_growth = key.study == "neumann-3d" && key.tree == "adaptive";
+    if (key.kind == SolverKind::bicgstab_amg && rows.size() >= 2) {
+      const std::string what =
+          fmt::format("{} {} bicgstab-amg at {:.0e}: iterations {} (finest / coarsest {:.2f})", key.study,
+                      key.tree, key.tolerance, its, ratio);
+      if (known_growth && ratio > 1.3)
+        result.warnings.push_back(what +
+                                  " are not flat: AMG's iterations grow on this matrix (see the case)");
+      else
+        result.expect(all && ratio <= 1.3, what + " are not flat (> 1.3)");
+    }
+    // At 1e-10 the error is the discretisation's: the direct solver's, to 3 digits.
+    if (key.tolerance == 1e-10) {
+      const auto direct = results.find({key.study, key.tree, SolverKind::direct, 1e-10});
+      if (direct == results.end()) continue;
+      for (const auto& [level, s] : rows)
+        for (const auto& [dl, d] : direct->second)
+          if (dl == level && s.stats.converged() && d.stats.converged())
+            result.expect(
+                std::abs(s.error - d.error) <= 1e-3 * d.error,
+                fmt::format("{} {} level {} {}: error {:.6e} against the direct solver's {:.6e}", key.study,
+                            key.tree, level, linalg::to_string(key.kind), s.error, d.error));
+    }
+  }
+
+  // The paper's comparison: adaptive against regular at the same finest h, tolerance 1e-6.
+  Table paper(
+      "the paper's comparison (Sec. 6): adaptive against regular at the same finest h, tolerance 1e-6",
+      {"study", "level", "adaptive solver", "regular solver", "speed-up", "iterations regular / adaptive",
+       "the paper"});
+  const struct {
+    SolverKind adaptive, regular;
+    const char* claim;
+  } pairs[] = {{SolverKind::bicgstab_jacobi, SolverKind::cg_jacobi, "2.6x faster"},
+               {SolverKind::bicgstab_ilut, SolverKind::cg_ic, "2.5x faster, 3x fewer iterations"},
+               {SolverKind::bicgstab_amg, SolverKind::cg_amg, "(not in the paper)"}};
+  for (const char* study : {"neumann-2d", "neumann-3d"})
+    for (const auto& pr : pairs) {
+      const auto a = results.find({study, "adaptive", pr.adaptive, 1e-6});
+      const auto r = results.find({study, "uniform", pr.regular, 1e-6});
+      if (a == results.end() || r == results.end()) continue;
+      for (const auto& [level, sa] : a->second)
+        for (const auto& [rl, sr] : r->second) {
+          if (rl != level || !sa.stats.converged() || !sr.stats.converged()) continue;
+          const double ta = sa.stats.setup_seconds + sa.stats.solve_seconds;
+          const double tr = sr.stats.setup_seconds + sr.stats.solve_seconds;
+          paper.add_row({std::string(study), long(level), linalg::to_string(pr.adaptive),
+                         linalg::to_string(pr.regular), tr / ta,
+                         double(sr.stats.iterations) / std::max(1, sa.stats.iterations),
+                         std::string(pr.claim)});
+        }
+    }
+  result.notes.push_back(
+      "SpMV-equivalents: (setup + solve) seconds over one product with the same matrix (median of 5 x 10 "
+      "products); the regular matrices are FD only, so their products are cheaper and their equivalents "
+      "higher "
+      "for the same seconds");
+  result.tables.push_back(std::move(table));
+  result.tables.push_back(std::move(flat));
+  result.tables.push_back(std::move(paper));
+  return result;
+}
+
+}  // namespace
+
+LIQUID_VERIFICATION_CASE(
+    {"ppe-solvers",
+     "every PPE solver (Jacobi, ILUT/IC, AMG) on the paper's Poisson matrices, adaptive and "
+     "uniform: iterations, time, SpMV-equivalents, error",
+     true, run, no_options});
+
+}  // namespace liquid::verification
