@@ -62,7 +62,7 @@ struct SolveOptions {
   // instead of 16) and the 262k uniform row in 6.4 s instead of 80 s, and 2D is no slower.
   double ilut_droptol = 1e-3;
   int ilut_fill = 10;
-  AmgOptions amg;
+  AmgOptions amg{};
 };
 
 enum class SolveInfo { converged, not_converged, setup_failed, non_finite };
