@@ -58,6 +58,7 @@ void apply_overrides(const SceneOverrides& o, Scene<Dim>& scene) {
   }
   if (o.adaptive >= 0) p.adaptive = o.adaptive == 1;
   if (!o.surface.empty()) p.surface = parse_pic_surface(o.surface);
+  if (!scene.ppe_solver_given) p.solver.kind = default_ppe_solver(p.adaptive);
   LIQUID_VERIFY(!p.adaptive || p.transfer == PicTransfer::rbf,
                 "method '{}' runs on a regular grid only; drop --adaptive or use --method rbf",
                 to_string(p.transfer));
@@ -174,7 +175,9 @@ void SceneRunner<Dim>::write_frame() {
     std::vector<double> type(g.cell_capacity(), 0.0);
     for (CellId c = 0; c < g.cell_capacity(); ++c)
       if (g.alive(c)) type[c] = static_cast<double>(s.classification().type[c]);
-    const std::vector<io::CellField> fields = {{"pressure", s.pressure()}, {"type", type}};
+    std::vector<io::CellField> fields;
+    if (scene_.output.writes("pressure")) fields.push_back({"pressure", s.pressure()});
+    if (scene_.output.writes("type")) fields.push_back({"type", type});
     const io::TreeFiles f = io::write_tree<Dim>(stem("cells", frame_), g, fields);
     written_.push_back(f.h5);
     grids.push_back(f.grid);
@@ -186,7 +189,9 @@ void SceneRunner<Dim>::write_frame() {
       for (int d = 0; d < Dim; ++d) v[static_cast<std::size_t>(i) * Dim + d] = p.v[i][d];
       speed[i] = p.v[i].norm();
     }
-    const std::vector<io::PointField> fields = {{"velocity", Dim, v}, {"speed", 1, speed}};
+    std::vector<io::PointField> fields;
+    if (scene_.output.writes("velocity")) fields.push_back({"velocity", Dim, v});
+    if (scene_.output.writes("speed")) fields.push_back({"speed", 1, speed});
     const io::PointFiles f = io::write_points<Dim>(stem("particles", frame_), p.x, fields);
     written_.push_back(f.h5);
     grids.push_back(f.grid);

@@ -122,6 +122,25 @@ class TableReader {
                   where(key), v, fmt::join(choices, ", "));
     return v;
   }
+  /// An array of strings, each one of `choices`, no repeats.
+  std::vector<std::string> strings(const char* key, const std::vector<std::string>& choices,
+                                   std::vector<std::string> fallback) const {
+    const toml::node* n = table_.get(key);
+    if (!n) return fallback;
+    const toml::array* a = n->as_array();
+    LIQUID_VERIFY(a != nullptr, "{}: expected an array of strings, found {}", where(key), type_name(*n));
+    std::vector<std::string> out;
+    for (const toml::node& e : *a) {
+      LIQUID_VERIFY(e.is_string(), "{}: every entry must be a string, found {}", where(key), type_name(e));
+      const std::string v = e.as_string()->get();
+      LIQUID_VERIFY(std::find(choices.begin(), choices.end(), v) != choices.end(),
+                    "{}: '{}' is not one of {}", where(key), v, fmt::join(choices, ", "));
+      LIQUID_VERIFY(std::find(out.begin(), out.end(), v) == out.end(), "{}: '{}' is listed twice", where(key),
+                    v);
+      out.push_back(v);
+    }
+    return out;
+  }
   template <int Dim>
   Vec<Dim> vec(const char* key, std::optional<Vec<Dim>> fallback = std::nullopt) const {
     const toml::node* n = table_.get(key);
@@ -373,7 +392,9 @@ Scene<Dim> load_scene(const std::string& path) {
     const TableReader r(t ? *t : empty, path, "ppe",
                         {"solver", "tolerance", "max_iterations", "continue_on_failure"});
     const std::vector<std::string> names = linalg::solver_names();
-    o.solver.kind = linalg::parse_solver(r.choice("solver", names, linalg::to_string(o.solver.kind)));
+    s.ppe_solver_given = r.has("solver");
+    o.solver.kind =
+        s.ppe_solver_given ? linalg::parse_solver(r.choice("solver", names)) : default_ppe_solver(o.adaptive);
     o.solver.tolerance = r.positive("tolerance", o.solver.tolerance);
     LIQUID_VERIFY(o.solver.tolerance < 1.0, "{}: a relative tolerance must be below 1 (found {})",
                   r.where("tolerance"), o.solver.tolerance);
@@ -383,10 +404,11 @@ Scene<Dim> load_scene(const std::string& path) {
   }
   {
     const toml::table* t = top.table("output");
-    const TableReader r(t ? *t : empty, path, "output", {"every", "cells", "particles"});
+    const TableReader r(t ? *t : empty, path, "output", {"every", "cells", "particles", "fields"});
     s.output.every = r.has("every") ? r.positive("every") : 0.0;
     s.output.cells = r.boolean("cells", true);
     s.output.particles = r.boolean("particles", true);
+    s.output.fields = r.strings("fields", {"pressure", "type", "velocity", "speed"}, s.output.fields);
   }
 
   // Liquid, solids, sources.
@@ -438,6 +460,10 @@ Scene<Dim> load_scene(const std::string& path) {
     o.sources.push_back(src);
   }
   return s;
+}
+
+linalg::SolverKind default_ppe_solver(bool adaptive) {
+  return adaptive ? linalg::SolverKind::bicgstab_ilut : linalg::SolverKind::cg_jacobi;
 }
 
 std::string scenes_folder() {

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <fstream>
 
 #include "liquid/core/error.hpp"
 #include "liquid/io/archive.hpp"
@@ -72,6 +73,27 @@ TEST(Scene, ValuesAndOverridesReachTheSolverOptions) {
   EXPECT_DOUBLE_EQ(sources.pic.sources[1].velocity[0], -1.5);
   EXPECT_TRUE(sources.pic.sources[0].active(0.25));
   EXPECT_FALSE(sources.pic.sources[0].active(0.5));
+}
+
+TEST(Scene, OutputFieldsAndTheRegularGridsSolverAreRead) {
+  const std::string dir = temp_folder("fields");
+  const std::string path = dir + "/fields.toml";
+  {
+    std::ofstream out(path);
+    out << "[domain]\nlo = [0.0, 0.0]\nhi = [1.0, 1.0]\n[grid]\nfinest = 4\n[solver]\nmethod = \"apic\"\n"
+           "[time]\nsteps = 2\n[output]\nfields = [\"speed\", \"type\"]\n"
+           "[[fluid]]\nshape = \"box\"\nlo = [0.0, 0.0]\nhi = [1.0, 0.5]\n";
+  }
+  const Scene<2> s = load_scene<2>(path);
+  EXPECT_TRUE(s.output.writes("speed"));
+  EXPECT_TRUE(s.output.writes("type"));
+  EXPECT_FALSE(s.output.writes("pressure"));
+  EXPECT_FALSE(s.output.writes("velocity"));
+  EXPECT_FALSE(s.pic.adaptive);  // apic runs on a regular grid
+  // The regular grid's PPE is the symmetric FD matrix: conjugate gradients unless the file says.
+  EXPECT_EQ(s.pic.solver.kind, linalg::SolverKind::cg_jacobi);
+  const Scene<2> tree = load_scene<2>(find_scene("pool-2d"));
+  EXPECT_EQ(tree.pic.solver.kind, linalg::SolverKind::bicgstab_ilut);
 }
 
 TEST(Scene, ResumedRunEndsBitForBitLikeTheUninterruptedOne) {

@@ -4,7 +4,8 @@
 // (density 1). The exact solution is u = 0, p = g (H - y). Run for T simulated seconds (2D: 2 s,
 // 3D: 0.5 s; full tier: 4 s and 1 s) with dt = min(0.02, CFL-limited) by each method:
 //   adaptive-rbf: AdaptivePic on a tree with the band at the finest level and level `coarse` inside;
-//   regular-pic / regular-apic / regular-flip: the regular baselines, a uniform tree at the finest level.
+//   regular-pic / regular-apic / regular-flip: the regular baselines, a uniform tree at the finest
+//   level, their symmetric PPE solved by Jacobi-preconditioned CG (the adaptive one: BiCGSTAB+ILUT).
 // Finest level 6 in 2D (h = 1/64), 4 in 3D (h = 1/16); the adaptive interior is 3 (2D) / 2 (3D).
 // Measured: the fluid volume from the cells (sum of fluid cell volumes) and the surface height from
 // the particles (the highest particle), their largest drift over the run relative to the start; the
@@ -20,6 +21,7 @@
 #include "common/case.hpp"
 #include "liquid/core/timer.hpp"
 #include "liquid/pic/adaptive_pic.hpp"
+#include "liquid/scene/scene.hpp"
 
 namespace liquid::verification {
 namespace {
@@ -66,6 +68,7 @@ Outcome run_pool(const Method& m, bool full, Table& series) {
   o.fine_level = Dim == 2 ? 6 : 4;
   o.coarse_level = Dim == 2 ? 3 : 2;
   o.transfer = m.transfer;
+  o.solver.kind = default_ppe_solver(m.adaptive);  // as a scene file would: PCG on the regular grid
   AdaptivePic<Dim> sim(o);
   Vec<Dim> hi = Vec<Dim>::Ones();
   hi[1] = kDepth;
