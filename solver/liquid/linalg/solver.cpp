@@ -194,6 +194,15 @@ std::unique_ptr<LinearSolver> make_solver(const SolveOptions& options) {
                 options.ilut_fill);
   LIQUID_VERIFY(options.max_iterations > 0, "solver needs a positive iteration limit, got {}",
                 options.max_iterations);
+  const AmgOptions& a = options.amg;
+  LIQUID_VERIFY(
+      a.sweeps >= 1 && a.gmres_restart >= 1 && a.max_iterations >= 1 && a.aggressive_levels >= 0 &&
+          a.max_interpolation_entries >= 0,
+      "AMG needs sweeps, GMRES restart and iteration cap >= 1 and non-negative aggressive levels and "
+      "interpolation entries (got {}, {}, {}, {}, {})",
+      a.sweeps, a.gmres_restart, a.max_iterations, a.aggressive_levels, a.max_interpolation_entries);
+  LIQUID_VERIFY(a.strength >= 0.0 && a.strength < 1.0, "AMG strength threshold {} is outside [0, 1)",
+                a.strength);
   using Jacobi = Eigen::DiagonalPreconditioner<double>;
   switch (options.kind) {
     case SolverKind::bicgstab_jacobi:

@@ -109,6 +109,7 @@ void AdaptivePic<Dim>::seed(const levelset::Function<Dim>& liquid,
                                          std::span<Vec<Dim>> v) {
     for (std::size_t i = 0; i < x.size(); ++i) v[i] = velocity ? velocity(x[i]) : Vec<Dim>::Zero();
   };
+  solid_.clear();  // the tree was rebuilt: classify() evaluates the mask afresh
   const levelset::Function<Dim> region =
       options_.solid ? levelset::subtract<Dim>(liquid, options_.solid) : liquid;
   const long n = seed_region<Dim>(graph_, region, SeedOptions{}, particles_, source);
@@ -164,7 +165,8 @@ void AdaptivePic<Dim>::restore(const PicState<Dim>& s) {
   LIQUID_VERIFY(graph.domain().lo == options_.domain.lo && graph.domain().hi == options_.domain.hi,
                 "PIC: the saved state's domain differs from the scene's");
   LIQUID_VERIFY(
-      graph.options().max_jump == options_.max_jump && graph.options().max_level == options_.fine_level,
+      graph.options().max_jump == options_.max_jump && graph.options().max_level == options_.fine_level &&
+          graph.options().min_level == graph_options(options_).min_level,
       "PIC: the saved state's tree (jump {}, finest level {}) differs from the options' (jump {}, finest {})",
       graph.options().max_jump, graph.options().max_level, options_.max_jump, options_.fine_level);
   const std::size_t n = s.particle_cell.size();
@@ -180,6 +182,7 @@ void AdaptivePic<Dim>::restore(const PicState<Dim>& s) {
       s.field_names.size() == s.field_components.size() && s.field_names.size() == s.field_values.size(),
       "PIC: the saved particle fields are incomplete");
   graph_ = std::move(graph);
+  solid_.clear();
   lattice_.reset();
   if (options_.transfer != PicTransfer::rbf) lattice_ = std::make_unique<RegularLattice<Dim>>(graph_);
   particles_.resize(static_cast<int>(n));
@@ -231,7 +234,9 @@ VelocitySource<Dim> AdaptivePic<Dim>::grid_velocity() const {
 
 template <int Dim>
 void AdaptivePic<Dim>::classify() {
-  if (options_.solid) {
+  // The solid mask of the whole tree once (after seeding or restoring); adapt_grid() keeps it
+  // current for the cells it creates, so a step does not evaluate the solid at every cell again.
+  if (options_.solid && solid_.empty()) {
     solid_.assign(graph_.cell_capacity(), 0);
     graph_.for_each_cell([&](CellId c) { solid_[c] = options_.solid(graph_.centre(c)) < 0.0; });
   }
@@ -313,6 +318,10 @@ void AdaptivePic<Dim>::adapt_grid(PicStepReport& r) {
   known_.resize(known.size());
   for (std::size_t f = 0; f < known.size(); ++f) known_[f] = known[f] > 0.5;
   remap::cell_field(graph_, report, p_);
+  if (!solid_.empty()) {
+    solid_.resize(graph_.cell_capacity(), 0);
+    for (CellId c : report.new_cells) solid_[c] = options_.solid(graph_.centre(c)) < 0.0;
+  }
   rebin<Dim>(graph_, particles_.x, bins_, &report);
   std::vector<CellId> children;
   const Origins& o = report.cell_origins;

@@ -226,6 +226,11 @@ std::string SceneRunner<Dim>::checkpoint() {
   w.put_scalar("run/checkpoint_every", static_cast<std::int64_t>(settings_.checkpoint_every));
 
   const CellGraphState<Dim>& gs = st.graph;
+  w.put("pic/graph/domain_lo", std::span<const double>(gs.domain.lo.data(), Dim));
+  w.put("pic/graph/domain_hi", std::span<const double>(gs.domain.hi.data(), Dim));
+  const std::vector<std::int32_t> graph_options = {gs.options.max_jump, gs.options.min_level,
+                                                   gs.options.max_level};
+  w.put("pic/graph/options", std::span<const std::int32_t>(graph_options));
   w.put("pic/graph/level", std::span<const std::int32_t>(gs.level));
   w.put("pic/graph/address", std::span<const std::int64_t>(gs.address));
   w.put("pic/graph/faces", std::span<const std::int32_t>(gs.faces));
@@ -288,11 +293,15 @@ SceneRunner<Dim> SceneRunner<Dim>::resume(const std::string& checkpoint, RunSett
   apply_overrides<Dim>(o, scene);
 
   PicState<Dim> st;
-  st.graph.domain = scene.pic.domain;
-  st.graph.options.max_jump = scene.pic.max_jump;
-  st.graph.options.min_level =
-      scene.pic.adaptive ? std::min(scene.pic.coarse_level, scene.pic.fine_level) : scene.pic.fine_level;
-  st.graph.options.max_level = scene.pic.fine_level;
+  // The tree's own settings as saved; AdaptivePic::restore() checks them against the scene's.
+  const std::vector<double> lo = r.doubles("pic/graph/domain_lo"), hi = r.doubles("pic/graph/domain_hi");
+  const std::vector<std::int32_t> graph_options = r.int32s("pic/graph/options");
+  LIQUID_VERIFY(lo.size() == Dim && hi.size() == Dim && graph_options.size() == 3,
+                "{}: the saved tree's domain or options have the wrong size", checkpoint);
+  for (int d = 0; d < Dim; ++d) st.graph.domain.lo[d] = lo[d], st.graph.domain.hi[d] = hi[d];
+  st.graph.options.max_jump = graph_options[0];
+  st.graph.options.min_level = graph_options[1];
+  st.graph.options.max_level = graph_options[2];
   st.graph.level = r.int32s("pic/graph/level");
   st.graph.address = r.int64s("pic/graph/address");
   st.graph.faces = r.int32s("pic/graph/faces");

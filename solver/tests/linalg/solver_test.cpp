@@ -142,6 +142,15 @@ TEST(AmgSolvers, BadMatricesAreReportedNotAborted) {
   const SolveStats zero_b = solve(A, Vector::Zero(A.rows()), x, {SolverKind::cg_amg, 1e-8, 100});
   EXPECT_TRUE(zero_b.converged());
   EXPECT_EQ(x.norm(), 0.0);
+  // Settings hypre would reject deep inside are refused up front, naming them.
+  for (auto bad :
+       {+[](AmgOptions& o) { o.sweeps = 0; }, +[](AmgOptions& o) { o.strength = 1.5; },
+        +[](AmgOptions& o) { o.strength = std::numeric_limits<double>::quiet_NaN(); },
+        +[](AmgOptions& o) { o.gmres_restart = -3; }, +[](AmgOptions& o) { o.max_iterations = 0; }}) {
+    SolveOptions o{SolverKind::gmres_amg, 1e-8, 100};
+    bad(o.amg);
+    EXPECT_THROW(make_solver(o), Error);
+  }
   // The initial guess is used: starting from the solution takes no iteration.
   const Vector x_exact = Vector::LinSpaced(A.rows(), -1.0, 1.0);
   x = x_exact;
