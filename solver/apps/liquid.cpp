@@ -19,6 +19,7 @@
 #include <fstream>
 
 #include "liquid/core/error.hpp"
+#include "liquid/linalg/solver.hpp"
 #include "liquid/scene/runner.hpp"
 
 namespace {
@@ -56,7 +57,16 @@ void echo(const Scene<Dim>& s, const RunSettings& settings, bool resumed) {
              o.surface == PicSurface::air_cells
                  ? std::string("p = 0 at the air cells' centres")
                  : fmt::format("p = 0 at the particles' level set (radius {} h)", o.surface_radius));
-  fmt::print("  ppe         {} to {:.1e}{}\n", linalg::to_string(o.solver.kind), o.solver.tolerance,
+  const bool amg = o.solver.kind == linalg::SolverKind::bicgstab_amg ||
+                   o.solver.kind == linalg::SolverKind::gmres_amg ||
+                   o.solver.kind == linalg::SolverKind::cg_amg;
+  fmt::print("  ppe         {} to {:.1e}{}{}\n", linalg::to_string(o.solver.kind), o.solver.tolerance,
+             !amg ? std::string()
+             : o.solver.amg.reuse_factor > 0
+                 ? fmt::format("; hierarchy kept while the layout stays (rebuilt past "
+                               "{}x its first iterations)",
+                               o.solver.amg.reuse_factor)
+                 : std::string("; a new hierarchy every step"),
              o.continue_on_ppe_failure ? ", going on when it does not converge" : "");
   fmt::print("  gravity     ({}); solids {}; sources {}\n",
              fmt::join(o.gravity.data(), o.gravity.data() + Dim, ", "), o.solid ? "yes" : "none",
@@ -142,9 +152,11 @@ void print_summary(const RunSummary& s, const std::string& name, int dim) {
       "   gives the measured figures: liquid run SCENE --method apic, or ci/bench-scenes)\n");
   fmt::print("  seconds per step by phase:");
   for (const auto& [phase, t] : s.seconds) fmt::print(" {} {:.4f}", phase, t);
-  fmt::print("\n  PPE: {} iterations in all ({:.1f} per step){}\n", s.ppe_iterations,
-             static_cast<double>(s.ppe_iterations) / std::max<long>(1, s.steps),
-             s.ppe_failures ? fmt::format(", {} steps did not converge", s.ppe_failures) : "");
+  fmt::print(
+      "\n  PPE: {} iterations in all ({:.1f} per step){}{}\n", s.ppe_iterations,
+      static_cast<double>(s.ppe_iterations) / std::max<long>(1, s.steps),
+      s.ppe_reused ? fmt::format(", {} of {} steps kept the AMG hierarchy", s.ppe_reused, s.steps) : "",
+      s.ppe_failures ? fmt::format(", {} steps did not converge", s.ppe_failures) : "");
   fmt::print("  wall time {:.2f} s\n", s.wall);
 }
 
@@ -156,10 +168,10 @@ void write_json(const std::string& path, const RunSummary& s, const std::string&
       "{{\n  \"scene\": \"{}\", \"dimension\": {}, \"steps\": {}, \"time\": {:.9g}, \"threads\": {},\n"
       "  \"fluid_cells\": {:.6g}, \"cells\": {:.6g}, \"particles\": {:.6g},\n"
       "  \"regular_cells\": {:.6g}, \"regular_particles\": {:.6g},\n"
-      "  \"ppe_iterations\": {}, \"ppe_failures\": {}, \"wall_seconds\": {:.6g},\n"
+      "  \"ppe_iterations\": {}, \"ppe_failures\": {}, \"ppe_reused\": {}, \"wall_seconds\": {:.6g},\n"
       "  \"seconds_per_step\": {{{}}}\n}}\n",
       name, dim, s.steps, s.time, s.threads, s.fluid_cells, s.cells, s.particles, s.regular_cells,
-      s.regular_particles, s.ppe_iterations, s.ppe_failures, s.wall, phases);
+      s.regular_particles, s.ppe_iterations, s.ppe_failures, s.ppe_reused, s.wall, phases);
   const std::string tmp = path + ".tmp";
   {
     std::ofstream out(tmp, std::ios::trunc);
@@ -236,6 +248,13 @@ int main(int argc, char** argv) {
   run->add_option("--surface", a.overrides.surface,
                   "air (p = 0 in the air cells) or levelset (p = 0 at the particles' level set)")
       ->check(CLI::IsMember({"air", "levelset"}));
+  run->add_option("--solver", a.overrides.solver, "PPE solver (instead of the scene's)")
+      ->check(CLI::IsMember(linalg::solver_names()));
+  run->add_option(
+         "--amg-reuse", a.overrides.amg_reuse,
+         "AMG: keep the hierarchy while the PPE's layout stays, rebuilding it once a step needs more "
+         "than this many times the iterations of the step that built it; 0: rebuild every step")
+      ->check(CLI::NonNegativeNumber);
   auto* regular = run->add_flag("--regular", a.regular, "run on a regular grid at the finest level");
   run->add_flag("--adaptive", a.adaptive, "run on the adaptive tree (rbf only)")->excludes(regular);
   run->add_option("--finest", a.overrides.finest, "finest level (the coarse level moves with it)")
@@ -269,9 +288,10 @@ int main(int argc, char** argv) {
     if (!a.resume.empty())
       LIQUID_VERIFY(
           a.overrides.method.empty() && a.overrides.adaptive < 0 && a.overrides.finest < 0 &&
-              a.overrides.steps < 0 && a.overrides.until < 0 && a.overrides.surface.empty(),
+              a.overrides.steps < 0 && a.overrides.until < 0 && a.overrides.surface.empty() &&
+              a.overrides.solver.empty() && a.overrides.amg_reuse < 0,
           "liquid run --resume continues the saved run as it was: --method, --regular, --adaptive, --finest, "
-          "--surface, --steps and --until are refused with it");
+          "--surface, --solver, --amg-reuse, --steps and --until are refused with it");
     LIQUID_VERIFY(a.checkpoint_every == 0 || !a.out.empty(),
                   "liquid run: --checkpoint-every needs an output folder (--out DIR)");
     int dim = 0;

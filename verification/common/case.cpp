@@ -68,4 +68,18 @@ CaseRegistrar::CaseRegistrar(CaseInfo info) {
   std::sort(cases.begin(), cases.end(), [](const CaseInfo& a, const CaseInfo& b) { return a.name < b.name; });
 }
 
+Json series_entry(const std::string& group, const std::string& label, const std::vector<double>& x,
+                  const std::vector<double>& y, const std::string& x_label, const std::string& y_label) {
+  Json j = Json::object();
+  j.set("group", group);
+  j.set("label", label);
+  Json xs = Json::array(), ys = Json::array();
+  for (std::size_t i = 0; i < x.size() && i < y.size(); ++i) xs.push(x[i]), ys.push(y[i]);
+  j.set("h", std::move(xs));
+  j.set("error", std::move(ys));
+  if (!x_label.empty()) j.set("x_label", x_label);
+  if (!y_label.empty()) j.set("y_label", y_label);
+  return j;
+}
+
 }  // namespace liquid::verification

@@ -87,6 +87,12 @@ struct GateFigure {
   double value;
 };
 
+/// One curve of a case's "series" (the report plots each group on log-log axes): points (x, y),
+/// by default h against an error; x_label / y_label name other axes (seconds against error, say).
+Json series_entry(const std::string& group, const std::string& label, const std::vector<double>& x,
+                  const std::vector<double>& y, const std::string& x_label = "",
+                  const std::string& y_label = "");
+
 struct CaseResult {
   bool passed = true;
   std::vector<Table> tables;

@@ -142,22 +142,6 @@ PoissonRun solve_poisson(const CellGraph<Dim>& graph, const PoissonStudy<Dim>& s
   return run;
 }
 
-namespace {
-
-Json series_entry(const std::string& group, const std::string& label, const std::vector<double>& h,
-                  const std::vector<double>& e) {
-  Json j = Json::object();
-  j.set("group", group);
-  j.set("label", label);
-  Json hs = Json::array(), es = Json::array();
-  for (std::size_t i = 0; i < h.size(); ++i) hs.push(h[i]), es.push(e[i]);
-  j.set("h", std::move(hs));
-  j.set("error", std::move(es));
-  return j;
-}
-
-}  // namespace
-
 template <int Dim>
 CaseResult run_poisson_study(PoissonStudy<Dim> study, const CaseOptions& options) {
   if (options.levels) study.level_min = options.levels->first, study.level_max = options.levels->last;
@@ -328,10 +312,8 @@ CaseResult run_poisson_study(PoissonStudy<Dim> study, const CaseOptions& options
   // Speed against error: seconds to assemble and solve, against the L-inf error of p reached.
   for (auto [label, e, t] : {std::tuple{"adaptive", &ep, &at}, std::tuple{"uniform", &uep, &ut}}) {
     if (e->empty()) continue;
-    Json j = series_entry("time to solution against the L-inf error of p", label, *e, *t);
-    j.set("x_label", "L-inf error of p");
-    j.set("y_label", "assembly + solve seconds");
-    series.push(std::move(j));
+    series.push(series_entry("time to solution against the L-inf error of p", label, *e, *t,
+                             "L-inf error of p", "assembly + solve seconds"));
   }
   result.fields.set("series", std::move(series));
   return result;

@@ -134,10 +134,12 @@ class Iterative final : public LinearSolver {
   SolveOptions options_;
 };
 
-/// The AMG solvers on one process: every row on this rank (see amg.hpp for the distributed call).
+/// The AMG solvers on one process: every row on this rank (see amg.hpp for the distributed call),
+/// the hierarchy kept for the next solve of a matrix with the same layout.
 class Amg final : public LinearSolver {
  public:
-  explicit Amg(SolveOptions options) : options_(options) {}
+  // MPI starts here (hypre needs it, even on one rank), not inside the first solve's timing.
+  explicit Amg(SolveOptions options) : options_(options), hierarchy_(options) { ensure_mpi(); }
   SolveStats solve(const SparseMatrix& A, const Vector& b, Vector& x) override {
     LIQUID_VERIFY(A.rows() == A.cols() && A.rows() == b.size(),
                   "{}: matrix {}x{} and right-hand side {} differ", to_string(options_.kind), A.rows(),
@@ -146,11 +148,12 @@ class Amg final : public LinearSolver {
                   "{}: {} MPI ranks share this solve; a distributed solve passes each rank's rows to "
                   "amg_solve_rows()",
                   to_string(options_.kind), mpi_size());
-    return amg_solve_rows(A, b, x, 0, A.rows(), options_);
+    return hierarchy_.solve_rows(A, b, x, 0, A.rows());
   }
 
  private:
   SolveOptions options_;
+  AmgHierarchy hierarchy_;
 };
 
 class Direct final : public LinearSolver {
@@ -203,6 +206,8 @@ std::unique_ptr<LinearSolver> make_solver(const SolveOptions& options) {
       a.sweeps, a.gmres_restart, a.max_iterations, a.aggressive_levels, a.max_interpolation_entries);
   LIQUID_VERIFY(a.strength >= 0.0 && a.strength < 1.0, "AMG strength threshold {} is outside [0, 1)",
                 a.strength);
+  LIQUID_VERIFY(a.reuse_factor >= 0.0, "AMG reuse factor {} must be 0 (never keep the hierarchy) or positive",
+                a.reuse_factor);
   using Jacobi = Eigen::DiagonalPreconditioner<double>;
   switch (options.kind) {
     case SolverKind::bicgstab_jacobi:

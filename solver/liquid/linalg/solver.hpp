@@ -43,6 +43,9 @@ struct AmgOptions {
   /// converges in tens or not at all: on the 3D "nearest" stencil rows of poisson-stencil-rules
   /// (20,672 unknowns) BiCGSTAB+AMG stagnated at residual 1.0 for 20,000 iterations (167 s).
   int max_iterations = 500;
+  /// A kept hierarchy (AmgHierarchy, the solvers of make_solver()) is rebuilt once a solve with it
+  /// needs more than this many times the iterations of the solve that built it; 0: never kept.
+  double reuse_factor = 1.5;
 };
 
 /// "bicgstab-jacobi", "bicgstab-ilut", "cg-ic", "cg-jacobi", "direct", "bicgstab-amg", "gmres-amg",
@@ -77,6 +80,9 @@ struct SolveStats {
   double solve_seconds = 0.0;
   long n_unknowns = 0;
   std::string note;  ///< what failed, when a setup failed (e.g. the hypre call and its error)
+  /// The preconditioner was built for an earlier matrix of the same layout (AMG's kept hierarchy:
+  /// setup_seconds is then only the copy of the new values).
+  bool hierarchy_reused = false;
 
   bool converged() const { return info == SolveInfo::converged; }
   std::string describe() const;
@@ -86,6 +92,8 @@ class LinearSolver {
  public:
   virtual ~LinearSolver() = default;
   /// Solves A x = b; x holds the initial guess on entry (resized to zero if its size differs).
+  /// The AMG solvers keep their hierarchy for the next call while A keeps its layout (see
+  /// AmgOptions::reuse_factor): keep one solver for a sequence of related systems.
   virtual SolveStats solve(const SparseMatrix& A, const Vector& b, Vector& x) = 0;
 };
 

@@ -228,6 +228,8 @@ class AdaptivePic {
   std::vector<double> u_, u_transferred_, p_;
   std::vector<std::uint8_t> known_;
   mac::PoissonSystem<Dim> system_;
+  // The PPE solver, kept across steps: an AMG solver keeps its hierarchy while the layout stays.
+  std::unique_ptr<linalg::LinearSolver> ppe_solver_;
   PhaseTimer timer_;
   double time_ = 0.0;
   long step_ = 0;

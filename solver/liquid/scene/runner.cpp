@@ -58,7 +58,12 @@ void apply_overrides(const SceneOverrides& o, Scene<Dim>& scene) {
   }
   if (o.adaptive >= 0) p.adaptive = o.adaptive == 1;
   if (!o.surface.empty()) p.surface = parse_pic_surface(o.surface);
-  if (!scene.ppe_solver_given) p.solver.kind = default_ppe_solver(p.adaptive);
+  if (!o.solver.empty()) {
+    p.solver.kind = linalg::parse_solver(o.solver);
+    scene.ppe_solver_given = true;
+  }
+  if (!scene.ppe_solver_given) p.solver.kind = default_ppe_solver(p.adaptive, Dim);
+  if (o.amg_reuse >= 0) p.solver.amg.reuse_factor = o.amg_reuse;
   LIQUID_VERIFY(!p.adaptive || p.transfer == PicTransfer::rbf,
                 "method '{}' runs on a regular grid only; drop --adaptive or use --method rbf",
                 to_string(p.transfer));
@@ -142,6 +147,7 @@ const PicStepReport& SceneRunner<Dim>::step() {
   ++steps_;
   ppe_iterations_ += last_.ppe.iterations;
   ppe_failures_ += last_.ppe.converged() ? 0 : 1;
+  ppe_reused_ += last_.ppe.hierarchy_reused ? 1 : 0;
   sum_fluid_ += static_cast<double>(last_.n_fluid_cells);
   sum_cells_ += static_cast<double>(last_.n_cells);
   sum_particles_ += static_cast<double>(last_.n_particles);
@@ -257,6 +263,7 @@ std::string SceneRunner<Dim>::checkpoint() {
   w.put_scalar("run/steps", static_cast<std::int64_t>(steps_));
   w.put_scalar("run/ppe_iterations", static_cast<std::int64_t>(ppe_iterations_));
   w.put_scalar("run/ppe_failures", static_cast<std::int64_t>(ppe_failures_));
+  w.put_scalar("run/ppe_reused", static_cast<std::int64_t>(ppe_reused_));
   const std::vector<double> sums = {sum_fluid_, sum_cells_, sum_particles_, sum_regular_cells_,
                                     sum_regular_particles_};
   w.put("run/sums", std::span<const double>(sums));
@@ -334,6 +341,8 @@ SceneRunner<Dim> SceneRunner<Dim>::resume(const std::string& checkpoint, RunSett
   run.steps_ = r.scalar_int("run/steps");
   run.ppe_iterations_ = r.scalar_int("run/ppe_iterations");
   run.ppe_failures_ = r.scalar_int("run/ppe_failures");
+  // Checkpoints written before the count existed lack it: those runs kept no hierarchy.
+  run.ppe_reused_ = r.has("run/ppe_reused") ? r.scalar_int("run/ppe_reused") : 0;
   const std::vector<double> sums = r.doubles("run/sums");
   LIQUID_VERIFY(sums.size() == 5, "{}: run/sums has {} entries, expected 5", checkpoint, sums.size());
   run.sum_fluid_ = sums[0], run.sum_cells_ = sums[1], run.sum_particles_ = sums[2];
@@ -365,6 +374,7 @@ RunSummary SceneRunner<Dim>::summary() const {
   for (const auto& [name, e] : t.entries()) s.seconds[name] = e.seconds / calls;
   s.ppe_iterations = ppe_iterations_;
   s.ppe_failures = ppe_failures_;
+  s.ppe_reused = ppe_reused_;
   s.threads = omp_get_max_threads();
   s.wall = wall_;
   return s;

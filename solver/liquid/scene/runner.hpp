@@ -27,12 +27,14 @@ namespace liquid {
 /// How a run differs from its scene file (the command line's overrides), kept in checkpoints so
 /// that a resumed run rebuilds the same solver.
 struct SceneOverrides {
-  std::string method;   ///< "" keeps the scene's; a method other than rbf also sets adaptive = false
-  int adaptive = -1;    ///< -1 keeps the scene's; 0 regular grid; 1 adaptive tree
-  int finest = -1;      ///< -1 keeps the scene's; else the finest level (the coarse level shifts with it)
-  long steps = -1;      ///< -1 keeps the scene's end; else a step count
-  double until = -1;    ///< < 0 keeps the scene's end; else the end time
-  std::string surface;  ///< "" keeps the scene's; else "air" or "levelset"
+  std::string method;     ///< "" keeps the scene's; a method other than rbf also sets adaptive = false
+  int adaptive = -1;      ///< -1 keeps the scene's; 0 regular grid; 1 adaptive tree
+  int finest = -1;        ///< -1 keeps the scene's; else the finest level (the coarse level shifts with it)
+  long steps = -1;        ///< -1 keeps the scene's end; else a step count
+  double until = -1;      ///< < 0 keeps the scene's end; else the end time
+  std::string surface;    ///< "" keeps the scene's; else "air" or "levelset"
+  std::string solver;     ///< "" keeps the scene's; else a PPE solver's name (linalg::solver_names())
+  double amg_reuse = -1;  ///< < 0 keeps the scene's; else AmgOptions::reuse_factor
 };
 
 /// 2 or 3: the dimension of the run saved in a checkpoint file.
@@ -62,6 +64,7 @@ struct RunSummary {
   std::map<std::string, double> seconds;  ///< per phase, average per step
   long ppe_iterations = 0;                ///< total
   long ppe_failures = 0;                  ///< steps whose PPE did not converge (continue_on_failure)
+  long ppe_reused = 0;  ///< steps whose PPE kept the last step's AMG hierarchy (same layout)
   int threads = 1;
   double wall = 0.0;  ///< seconds of the whole run (frames and checkpoints included)
 };
@@ -104,7 +107,7 @@ class SceneRunner {
   int frame_ = 0;
   double next_frame_ = 0.0;
   // Sums for the summary (restored from checkpoints so that a resumed run reports the whole run).
-  long steps_ = 0, ppe_iterations_ = 0, ppe_failures_ = 0;
+  long steps_ = 0, ppe_iterations_ = 0, ppe_failures_ = 0, ppe_reused_ = 0;
   double sum_fluid_ = 0, sum_cells_ = 0, sum_particles_ = 0, sum_regular_cells_ = 0,
          sum_regular_particles_ = 0;
   double wall_ = 0.0;

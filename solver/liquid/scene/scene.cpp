@@ -390,17 +390,21 @@ Scene<Dim> load_scene(const std::string& path) {
   {
     const toml::table* t = top.table("ppe");
     const TableReader r(t ? *t : empty, path, "ppe",
-                        {"solver", "tolerance", "max_iterations", "continue_on_failure"});
+                        {"solver", "tolerance", "max_iterations", "continue_on_failure", "amg_reuse"});
     const std::vector<std::string> names = linalg::solver_names();
     s.ppe_solver_given = r.has("solver");
-    o.solver.kind =
-        s.ppe_solver_given ? linalg::parse_solver(r.choice("solver", names)) : default_ppe_solver(o.adaptive);
+    o.solver.kind = s.ppe_solver_given ? linalg::parse_solver(r.choice("solver", names))
+                                       : default_ppe_solver(o.adaptive, Dim);
     o.solver.tolerance = r.positive("tolerance", o.solver.tolerance);
     LIQUID_VERIFY(o.solver.tolerance < 1.0, "{}: a relative tolerance must be below 1 (found {})",
                   r.where("tolerance"), o.solver.tolerance);
     o.solver.max_iterations =
         static_cast<int>(r.integer_in("max_iterations", 1, 10000000, o.solver.max_iterations));
     o.continue_on_ppe_failure = r.boolean("continue_on_failure", false);
+    o.solver.amg.reuse_factor = r.number("amg_reuse", o.solver.amg.reuse_factor);
+    LIQUID_VERIFY(o.solver.amg.reuse_factor >= 0.0,
+                  "{}: must be 0 (a new AMG hierarchy every step) or positive (found {})",
+                  r.where("amg_reuse"), o.solver.amg.reuse_factor);
   }
   {
     const toml::table* t = top.table("output");
@@ -462,8 +466,9 @@ Scene<Dim> load_scene(const std::string& path) {
   return s;
 }
 
-linalg::SolverKind default_ppe_solver(bool adaptive) {
-  return adaptive ? linalg::SolverKind::bicgstab_ilut : linalg::SolverKind::cg_jacobi;
+linalg::SolverKind default_ppe_solver(bool adaptive, int dim) {
+  if (!adaptive) return linalg::SolverKind::cg_jacobi;
+  return dim == 3 ? linalg::SolverKind::bicgstab_amg : linalg::SolverKind::bicgstab_ilut;
 }
 
 std::string scenes_folder() {

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "liquid/core/error.hpp"
+#include "liquid/linalg/amg.hpp"
 #include "liquid/linalg/solver.hpp"
 
 namespace liquid::linalg {
@@ -143,10 +144,11 @@ TEST(AmgSolvers, BadMatricesAreReportedNotAborted) {
   EXPECT_TRUE(zero_b.converged());
   EXPECT_EQ(x.norm(), 0.0);
   // Settings hypre would reject deep inside are refused up front, naming them.
-  for (auto bad :
-       {+[](AmgOptions& o) { o.sweeps = 0; }, +[](AmgOptions& o) { o.strength = 1.5; },
-        +[](AmgOptions& o) { o.strength = std::numeric_limits<double>::quiet_NaN(); },
-        +[](AmgOptions& o) { o.gmres_restart = -3; }, +[](AmgOptions& o) { o.max_iterations = 0; }}) {
+  for (auto bad : {+[](AmgOptions& o) { o.sweeps = 0; }, +[](AmgOptions& o) { o.strength = 1.5; },
+                   +[](AmgOptions& o) { o.strength = std::numeric_limits<double>::quiet_NaN(); },
+                   +[](AmgOptions& o) { o.gmres_restart = -3; }, +[](AmgOptions& o) { o.max_iterations = 0; },
+                   +[](AmgOptions& o) { o.reuse_factor = -1.0; },
+                   +[](AmgOptions& o) { o.reuse_factor = std::numeric_limits<double>::quiet_NaN(); }}) {
     SolveOptions o{SolverKind::gmres_amg, 1e-8, 100};
     bad(o.amg);
     EXPECT_THROW(make_solver(o), Error);
@@ -157,6 +159,89 @@ TEST(AmgSolvers, BadMatricesAreReportedNotAborted) {
   const SolveStats warm = solve(A, A * x_exact, x, {SolverKind::bicgstab_amg, 1e-8, 100});
   EXPECT_TRUE(warm.converged());
   EXPECT_EQ(warm.iterations, 0);
+}
+
+// A kept hierarchy: the same layout with new values is solved with the old hierarchy (and solved
+// right: the true residual of the new matrix is what is judged); another layout builds a new one.
+TEST(AmgSolvers, KeptHierarchySolvesTheNewValues) {
+  const SparseMatrix A = poisson(40);
+  SparseMatrix B = A;
+  for (int k = 0; k < B.rows(); ++k) B.coeffRef(k, k) *= 1.0 + 0.02 * std::sin(0.1 * k);  // same layout
+  const Vector x_exact = Vector::LinSpaced(A.rows(), -1.0, 2.0);
+  for (SolverKind kind : {SolverKind::bicgstab_amg, SolverKind::gmres_amg, SolverKind::cg_amg}) {
+    const auto solver = make_solver({kind, 1e-10, 500});
+    Vector x;
+    const SolveStats first = solver->solve(A, A * x_exact, x);
+    ASSERT_TRUE(first.converged()) << first.describe();
+    EXPECT_FALSE(first.hierarchy_reused);
+    x.setZero();
+    const SolveStats second = solver->solve(B, B * x_exact, x);
+    ASSERT_TRUE(second.converged()) << second.describe();
+    EXPECT_TRUE(second.hierarchy_reused) << to_string(kind);
+    EXPECT_LT((x - x_exact).lpNorm<Eigen::Infinity>(), 1e-7) << to_string(kind);
+    // The copy of the values costs far less than building the hierarchy.
+    EXPECT_LE(second.iterations, 2 * first.iterations + 1);
+    const SparseMatrix C = poisson(41);  // another layout
+    x.resize(0);
+    const SolveStats third = solver->solve(C, C * Vector::Ones(C.rows()), x);
+    EXPECT_TRUE(third.converged());
+    EXPECT_FALSE(third.hierarchy_reused);
+  }
+}
+
+// The policy: a kept hierarchy that needs more than reuse_factor times its first solve's iterations
+// is rebuilt for the next solve; reuse_factor = 0 never keeps one.
+TEST(AmgSolvers, KeptHierarchyIsRebuiltWhenItCostsIterations) {
+  const SparseMatrix A = poisson(40);
+  // The same layout, values scaled by 1/8: the kept smoother's l1 norms are 8 times too large, so
+  // its sweeps are damped and the kept hierarchy needs more iterations (a safe direction: a
+  // smoother whose norms are too small can diverge, which the fallback to a rebuild covers).
+  const SparseMatrix far = 0.125 * A;
+  const Vector b = Vector::Ones(A.rows());
+  AmgHierarchy amg({SolverKind::cg_amg, 1e-10, 500});
+  Vector x;
+  ASSERT_TRUE(amg.solve_rows(A, b, x, 0, A.rows()).converged());
+  x.setZero();
+  const SolveStats kept = amg.solve_rows(far, b, x, 0, far.rows());
+  ASSERT_TRUE(kept.converged()) << kept.describe();
+  EXPECT_TRUE(kept.hierarchy_reused) << kept.describe();
+  EXPECT_EQ(amg.n_setups(), 1) << kept.describe();
+  x.setZero();
+  const SolveStats rebuilt = amg.solve_rows(far, b, x, 0, far.rows());
+  EXPECT_TRUE(rebuilt.converged());
+  EXPECT_FALSE(rebuilt.hierarchy_reused) << "kept: " << kept.iterations << " iterations";
+  EXPECT_EQ(amg.n_setups(), 2);
+  EXPECT_LT(rebuilt.iterations, kept.iterations);
+
+  // Values that make the kept smoother diverge (its l1 norms far too small, anisotropy 100:1):
+  // that solve does not converge with the kept hierarchy, which is rebuilt at once.
+  SparseMatrix stiff = A;
+  for (int i = 0; i < 40; ++i)
+    for (int j = 0; j < 40; ++j) {
+      const int k = i * 40 + j;
+      if (j > 0) stiff.coeffRef(k, k - 1) = -100.0;
+      if (j + 1 < 40) stiff.coeffRef(k, k + 1) = -100.0;
+      stiff.coeffRef(k, k) = 202.0;
+    }
+  AmgHierarchy again({SolverKind::cg_amg, 1e-10, 500});
+  x.setZero();
+  ASSERT_TRUE(again.solve_rows(A, b, x, 0, A.rows()).converged());
+  x.setZero();
+  const SolveStats fallback = again.solve_rows(stiff, b, x, 0, stiff.rows());
+  EXPECT_TRUE(fallback.converged()) << fallback.describe();
+  EXPECT_FALSE(fallback.hierarchy_reused);
+  EXPECT_NE(fallback.note.find("rebuilt"), std::string::npos) << fallback.describe();
+  EXPECT_EQ(again.n_setups(), 2);
+  EXPECT_LE((stiff * x - b).norm(), 1e-10 * b.norm());
+
+  SolveOptions never{SolverKind::cg_amg, 1e-10, 500};
+  never.amg.reuse_factor = 0.0;
+  AmgHierarchy fresh(never);
+  for (int k = 0; k < 3; ++k) {
+    x.setZero();
+    EXPECT_FALSE(fresh.solve_rows(A, b, x, 0, A.rows()).hierarchy_reused);
+  }
+  EXPECT_EQ(fresh.n_setups(), 3);
 }
 
 }  // namespace

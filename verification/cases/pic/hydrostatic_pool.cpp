@@ -68,7 +68,7 @@ Outcome run_pool(const Method& m, bool full, Table& series) {
   o.fine_level = Dim == 2 ? 6 : 4;
   o.coarse_level = Dim == 2 ? 3 : 2;
   o.transfer = m.transfer;
-  o.solver.kind = default_ppe_solver(m.adaptive);  // as a scene file would: PCG on the regular grid
+  o.solver.kind = default_ppe_solver(m.adaptive, Dim);  // as a scene file would: PCG on the regular grid
   AdaptivePic<Dim> sim(o);
   Vec<Dim> hi = Vec<Dim>::Ones();
   hi[1] = kDepth;

@@ -133,17 +133,9 @@ void study(const CaseOptions& options, Table& table, CaseResult& result, Json& s
   }
   result.notes.push_back(fmt::format("{}D: crossover of time against error: {}", Dim, crossover));
   for (auto [label, e, t] : {std::tuple{"adaptive", &ae, &at}, std::tuple{"uniform", &ue, &ut}}) {
-    Json j = Json::object();
-    j.set("group",
-          fmt::format("poisson-adaptivity-gain {}D: time to solution against the L-inf error of p", Dim));
-    j.set("label", label);
-    Json hs = Json::array(), es = Json::array();
-    for (std::size_t i = 0; i < e->size(); ++i) hs.push((*e)[i]), es.push((*t)[i]);
-    j.set("h", std::move(hs));
-    j.set("error", std::move(es));
-    j.set("x_label", "L-inf error of p");
-    j.set("y_label", "assembly + solve seconds");
-    series.push(std::move(j));
+    series.push(series_entry(
+        fmt::format("poisson-adaptivity-gain {}D: time to solution against the L-inf error of p", Dim), label,
+        *e, *t, "L-inf error of p", "assembly + solve seconds"));
   }
 }
 
