@@ -14,6 +14,7 @@
 
 #include <cmath>
 
+#include "liquid/core/timer.hpp"
 #include "liquid/levelset/levelset.hpp"
 #include "liquid/linalg/solver.hpp"
 #include "liquid/mac/poisson.hpp"
@@ -58,45 +59,73 @@ BENCHMARK(BM_PoissonAssembly)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 
-// BM_PpeSolve/solver/tree/level: one solve (setup included) of the 2D Neumann PPE of
-// poisson-neumann-2d (p = cos x cos y - 1 on [0, pi]^2, pinned), tolerance 1e-8, from zero.
-// solver: 0 bicgstab-ilut (the default), 1 bicgstab-amg, 2 gmres-amg, 3 cg-amg (uniform only);
-// tree: 0 uniform at `level`, 1 a band around a circle at `level`, level - 2 elsewhere (cg-amg on
-// the uniform tree only: it needs a symmetric matrix). The first AMG solve of a process also starts
-// MPI (about 0.3 s): run with --benchmark_min_time large enough to repeat.
-// Counters: unknowns, iterations.
+// BM_PpeSolve<Dim>/solver/tree/level: one solve (setup included) of the Neumann PPE of
+// poisson-neumann-2d/3d (p = prod cos x_k - 1 on [0, pi]^Dim, pinned), tolerance 1e-8, from zero.
+// solver: 0 bicgstab-ilut (the 2D default), 1 bicgstab-amg, 2 gmres-amg, 3 cg-amg (uniform only);
+// tree: 0 uniform at `level`, 1 a band around a circle (sphere) of radius 0.9 at `level`, level - 2
+// elsewhere (cg-amg on the uniform tree only: it needs a symmetric matrix). MPI starts before the
+// timing (make_solver). Counters: unknowns, iterations, spmv_equiv (seconds of a solve over one
+// product with the matrix on one thread, as hypre runs).
+template <int Dim>
 void BM_PpeSolve(benchmark::State& state) {
   const linalg::SolverKind kinds[] = {linalg::SolverKind::bicgstab_ilut, linalg::SolverKind::bicgstab_amg,
                                       linalg::SolverKind::gmres_amg, linalg::SolverKind::cg_amg};
   const auto kind = kinds[state.range(0)];
   const bool adaptive = state.range(1) != 0;
   const int level = static_cast<int>(state.range(2));
-  const Box<2> domain{Vec<2>::Zero(), Vec<2>::Constant(M_PI)};
-  const CellGraph<2> g =
-      adaptive ? tree::narrow_band<2>(domain, levelset::sphere<2>(Vec<2>::Constant(0.5 * M_PI), 0.9),
-                                      level - 2, level, 2.0)
-               : tree::uniform<2>(domain, level);
-  mac::PoissonProblem<2> problem;
-  problem.f = [](const Vec<2>& x) { return -2.0 * std::cos(x[0]) * std::cos(x[1]); };
-  problem.pin_value = [](const Vec<2>& x) { return std::cos(x[0]) * std::cos(x[1]) - 1.0; };
-  const auto sys = mac::assemble_poisson<2>(g, problem, mac::PoissonOptions{});
+  const Box<Dim> domain{Vec<Dim>::Zero(), Vec<Dim>::Constant(M_PI)};
+  const CellGraph<Dim> g =
+      adaptive ? tree::narrow_band<Dim>(domain, levelset::sphere<Dim>(Vec<Dim>::Constant(0.5 * M_PI), 0.9),
+                                        level - 2, level, 2.0)
+               : tree::uniform<Dim>(domain, level);
+  const auto cosines = [](const Vec<Dim>& x) {
+    double p = 1.0;
+    for (int k = 0; k < Dim; ++k) p *= std::cos(x[k]);
+    return p;
+  };
+  mac::PoissonProblem<Dim> problem;
+  problem.f = [cosines](const Vec<Dim>& x) { return -Dim * cosines(x); };
+  problem.pin_value = [cosines](const Vec<Dim>& x) { return cosines(x) - 1.0; };
+  const auto sys = mac::assemble_poisson<Dim>(g, problem, mac::PoissonOptions{});
+  [[maybe_unused]] const auto warm = linalg::make_solver({kind, 1e-8, 20000});  // starts MPI (AMG) untimed
   linalg::SolveStats stats;
+  double seconds = 0.0;
   for (auto _ : state) {
     linalg::Vector x;
-    stats = linalg::solve(sys.A, sys.b, x, {kind, 1e-8, 20000});
+    // A fresh solver each time: the timing includes the setup (a kept AMG hierarchy would skip it).
+    stats = linalg::make_solver({kind, 1e-8, 20000})->solve(sys.A, sys.b, x);
+    seconds = stats.setup_seconds + stats.solve_seconds;
     benchmark::DoNotOptimize(x.data());
   }
   if (!stats.converged()) state.SkipWithError(stats.describe().c_str());
+  const int threads = Eigen::nbThreads();
+  Eigen::setNbThreads(1);
+  const linalg::Vector ones = linalg::Vector::Ones(sys.A.cols());
+  linalg::Vector y(sys.A.rows());
+  Stopwatch product;
+  for (int k = 0; k < 20; ++k) y.noalias() = sys.A * ones;
+  const double t_spmv = product.seconds() / 20.0;
+  Eigen::setNbThreads(threads);
   state.counters["unknowns"] = static_cast<double>(sys.n_unknowns());
   state.counters["iterations"] = stats.iterations;
+  state.counters["spmv_equiv"] = seconds / std::max(t_spmv, 1e-9);
 }
-BENCHMARK(BM_PpeSolve)
-    ->ArgNames({"solver", "tree", "level"})
+void ppe_solve_args(benchmark::internal::Benchmark* b, std::initializer_list<int> levels) {
+  b->ArgNames({"solver", "tree", "level"});
+  for (int solver = 0; solver < 4; ++solver)
+    for (int tree = 0; tree < 2; ++tree)
+      for (int level : levels)
+        if (solver != 3 || tree == 0) b->Args({solver, tree, level});
+}
+BENCHMARK(BM_PpeSolve<2>)
     ->Apply([](benchmark::internal::Benchmark* b) {
-      for (int solver = 0; solver < 4; ++solver)
-        for (int tree = 0; tree < 2; ++tree)
-          for (int level : {6, 7, 8})
-            if (solver != 3 || tree == 0) b->Args({solver, tree, level});
+      ppe_solve_args(b, {6, 7, 8});
+    })
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+BENCHMARK(BM_PpeSolve<3>)
+    ->Apply([](benchmark::internal::Benchmark* b) {
+      ppe_solve_args(b, {4, 5});
     })
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
