@@ -254,7 +254,7 @@ int main(int argc, char** argv) {
          "--amg-reuse", a.overrides.amg_reuse,
          "AMG: keep the hierarchy while the PPE's layout stays, rebuilding it once a step needs more "
          "than this many times the iterations of the step that built it; 0: rebuild every step")
-      ->check(CLI::NonNegativeNumber);
+      ->check(CLI::Range(0.0, 100.0));
   auto* regular = run->add_flag("--regular", a.regular, "run on a regular grid at the finest level");
   run->add_flag("--adaptive", a.adaptive, "run on the adaptive tree (rbf only)")->excludes(regular);
   run->add_option("--finest", a.overrides.finest, "finest level (the coarse level moves with it)")

@@ -290,6 +290,10 @@ void AdaptivePic<Dim>::adapt_grid(PicStepReport& r) {
         if (s.region(graph_.centre(c)) < 0.5 * graph_.cell_size(c).norm() && !cls_.is_solid(c))
           centres.push_back(c);
       });
+  if (options_.refine)
+    graph_.for_each_cell([&](CellId c) {
+      if (options_.refine(graph_.centre(c)) < 0.5 * graph_.cell_size(c).norm()) centres.push_back(c);
+    });
   // So is the liquid's contact with a solid, two hops wider than the band: no RBF-FD row then
   // reaches a solid cell, where fold_solid_rows() is only first order. Measured on a still pool
   // around a submerged box (2D, levels 3-5, 10 steps): 0.24 m/s with no refinement at the

@@ -79,6 +79,10 @@ struct PicOptions {
   /// particles that enter it are pushed back out.
   levelset::Function<Dim> solid;
   std::vector<PicSource<Dim>> sources;
+  /// A region kept at fine_level whatever the liquid does (< 0 inside; empty: none), with the
+  /// band's hops around it: the cells it may overlap (within half a diagonal of their centre).
+  /// For flows whose detail is not at the surface (a vortex in a full box, say).
+  levelset::Function<Dim> refine;
   PicTransfer transfer = PicTransfer::rbf;
   double flip = 0.95;  ///< FLIP's blend for transfer = flip (1: pure FLIP, 0: PIC)
   TransferOptions rbf = stable_rbf();
