@@ -8,18 +8,19 @@
 // in the refined region [pi/4, 3pi/4]^2, where the vorticity peaks, one level coarser elsewhere),
 // regular-rbf (the same transfers on the uniform tree), and the regular baselines regular-pic,
 // regular-flip (blend 0.95), regular-apic, all at finest levels 3, 4, 5 (full tier: 4, 5, 6;
-// --levels changes them), h = pi / 2^level.
-// Measured at t = T, 2T, 4T: kinetic energy retained (the particles' mean |v|^2 over its value at
-// seeding), enstrophy retained (the grid velocity after the projection, sampled on a 64 x 64
-// lattice of points by the same RBF interpolation for every method, its vorticity by central
-// differences, integrated, over the same sampling of the exact field), the L-inf velocity error at
-// those sample points, and its observed order in h (least squares over the levels).
-// 2D only: the 3D analogue (the same cells, w = 0, on [0, pi]^3) is not built yet.
-// Expected (asserted): the particles' energy never grows for PIC and APIC (by more than 1e-3,
-// reseeding included); RBF keeps more energy than PIC at 4T on the finest row. The goal,
-// adaptive RBF keeping at least 90% of APIC's retained energy at 4T, is measured and printed with
-// the verdict. Gated: energy and enstrophy retained and the velocity error at 4T, per method and
-// level.
+// --levels changes them), h = pi / 2^level. 2D only: the 3D analogue (the same cells with w = 0 on
+// [0, pi]^3) is not built yet.
+// Measured at t = T, 2T, 4T: kinetic energy retained (sum of w |v|^2 over the particles, w the
+// volume each stands for (particle_volumes), over its value at seeding), enstrophy retained (the
+// grid velocity after the projection, sampled on a 64 x 64 lattice of points by the same RBF
+// interpolation for every method, its vorticity by central differences, integrated, over the same
+// sampling of the exact field), the L-inf velocity error at those sample points, and its observed
+// order in h (least squares over the levels).
+// Expected (asserted): the particles' energy never grows for PIC and APIC by more than 5e-3 (the
+// noise of the particle shares, see kinetic-energy); RBF keeps more energy than PIC at 4T on the
+// finest row. The goal, adaptive RBF keeping at least 90% of APIC's retained energy at 4T,
+// is measured and printed with the verdict. Gated: energy and enstrophy retained and the velocity
+// error at 4T, per method and level.
 
 #include <cmath>
 
@@ -30,6 +31,7 @@
 #include "liquid/core/timer.hpp"
 #include "liquid/pic/adaptive_pic.hpp"
 #include "liquid/transfer/velocity_field.hpp"
+#include "studies/flow_measures.hpp"
 
 namespace liquid::verification {
 namespace {
@@ -79,10 +81,13 @@ Sampled sample(const F& velocity) {
   return out;
 }
 
-double mean_square_speed(const Particles<2>& p) {
+/// Twice the kinetic energy of the box's liquid, from the particles.
+double mean_square_speed(const AdaptivePic<2>& sim) {
+  const Particles<2>& p = sim.particles();
+  const std::vector<double> w = particle_volumes<2>(sim.graph(), p.x, M_PI * M_PI);
   double sum = 0.0;
-  for (const auto& v : p.v) sum += v.squaredNorm();
-  return p.size() > 0 ? sum / static_cast<double>(p.size()) : 0.0;
+  for (std::size_t i = 0; i < p.size(); ++i) sum += w[i] * p.v[i].squaredNorm();
+  return sum;
 }
 
 struct Checkpoint {
@@ -106,7 +111,7 @@ Run run_method(const Method& m, int level) {
   if (m.adaptive) o.refine = levelset::box<2>({Vec<2>::Constant(M_PI / 4), Vec<2>::Constant(3 * M_PI / 4)});
   AdaptivePic<2> sim(o);
   sim.seed([](const Vec<2>&) { return -1.0; }, exact);
-  const double e0 = mean_square_speed(sim.particles());
+  const double e0 = mean_square_speed(sim);
   const double z0 = sample(exact).enstrophy;
   Run run;
   Stopwatch clock;
@@ -118,7 +123,7 @@ Run run_method(const Method& m, int level) {
     ++run.steps;
     run.particles += static_cast<double>(r.n_particles);
     run.cells += static_cast<double>(r.n_cells);
-    const double e = mean_square_speed(sim.particles()) / e0;
+    const double e = mean_square_speed(sim) / e0;
     run.max_energy_gain = std::max(run.max_energy_gain, e - 1.0);
     if (sim.time() >= marks[next] - 1e-9) {
       const FaceVelocityField<2> field(sim.graph(), sim.face_velocity(), {}, TransferOptions::paper_rbf());
@@ -162,9 +167,9 @@ CaseResult run(const CaseOptions& options) {
       result.gate.push_back({key + " velocity error at 4T", GateFigure::Kind::error, r.at[2].error});
       if (m.transfer == PicTransfer::pic || m.transfer == PicTransfer::apic)
         result.expect(
-            r.max_energy_gain <= 1e-3,
+            r.max_energy_gain <= 5e-3,
             fmt::format("{}: the particles' kinetic energy grew by {:.2e}", key, r.max_energy_gain));
-      else if (r.max_energy_gain > 1e-3)
+      else if (r.max_energy_gain > 5e-3)
         result.warnings.push_back(fmt::format(
             "{}: the particles' kinetic energy grew by {:.2e} during the run", key, r.max_energy_gain));
       for (int k = 0; k < 3; ++k)
