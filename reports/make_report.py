@@ -78,6 +78,8 @@ PAPER = {
     "transfer-accuracy": "RBF below MLS (RBF Liquids, Fig. 4); RBF keeps more energy than PIC (Fig. 10)",
     "scene-smoke": "-",
     "ppe-solvers": "adaptive BiCGSTAB 2.6x (Jacobi) and 2.5x (ILU, 3x fewer iterations) faster than regular PCG (Sec. 6)",
+    "vorticity": "RBF keeps vorticity like APIC, far better than PIC/FLIP (RBF Liquids, Fig. 11)",
+    "kinetic-energy": "RBF keeps more kinetic energy than PIC and stays stable (RBF Liquids, Fig. 10)",
 }
 
 

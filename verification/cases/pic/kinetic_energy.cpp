@@ -32,16 +32,7 @@ namespace {
 constexpr double kGravity = 9.81;
 const Box<2> kColumn{Vec<2>::Zero(), Vec<2>(0.4, 0.6)};
 
-struct Method {
-  const char* name;
-  bool adaptive;
-  PicTransfer transfer;
-};
-const Method kMethods[] = {{"adaptive-rbf", true, PicTransfer::rbf},
-                           {"regular-rbf", false, PicTransfer::rbf},
-                           {"regular-pic", false, PicTransfer::pic},
-                           {"regular-flip", false, PicTransfer::flip},
-                           {"regular-apic", false, PicTransfer::apic}};
+using Method = FlowMethod;
 
 struct Energies {
   double kinetic = 0.0, potential = 0.0;
@@ -107,7 +98,7 @@ CaseResult run(const CaseOptions& options) {
   const int first = options.full ? 6 : 5, last = options.full ? 7 : 5;
   const double end = options.full ? 2.0 : 1.5;
   for (int level = first; level <= last; ++level)
-    for (const Method& m : kMethods) {
+    for (const Method& m : kFlowMethods) {
       const Run r = run_method(m, level, end);
       table.add_row({std::string(m.name), long(level), r.steps, r.seconds_per_step, r.peak, r.peak_time,
                      std::isnan(r.half_time) ? Table::Cell(std::string("not within the run"))

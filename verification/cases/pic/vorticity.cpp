@@ -39,16 +39,7 @@ namespace {
 constexpr double kTurnover = M_PI;
 constexpr int kSamples = 64;
 
-struct Method {
-  const char* name;
-  bool adaptive;
-  PicTransfer transfer;
-};
-const Method kMethods[] = {{"adaptive-rbf", true, PicTransfer::rbf},
-                           {"regular-rbf", false, PicTransfer::rbf},
-                           {"regular-pic", false, PicTransfer::pic},
-                           {"regular-flip", false, PicTransfer::flip},
-                           {"regular-apic", false, PicTransfer::apic}};
+using Method = FlowMethod;
 
 Vec<2> exact(const Vec<2>& x) {
   return {std::sin(x[0]) * std::cos(x[1]), -std::cos(x[0]) * std::sin(x[1])};
@@ -150,7 +141,7 @@ CaseResult run(const CaseOptions& options) {
   std::vector<double> hs;
   for (int level = levels.first; level <= levels.last; ++level) hs.push_back(M_PI / std::ldexp(1.0, level));
   Json series = Json::array();
-  for (const Method& m : kMethods) {
+  for (const Method& m : kFlowMethods) {
     std::vector<double> err4, seconds;
     for (int level = levels.first; level <= levels.last; ++level) {
       const Run r = run_method(m, level);
@@ -210,7 +201,7 @@ CaseResult run(const CaseOptions& options) {
                   runs["regular-flip"].back().at[2].energy, share, share >= 0.9 ? "met" : "not met"));
   // Speed against error at the finest row: seconds to 4T and the velocity error reached.
   std::string speed;
-  for (const Method& m : kMethods) {
+  for (const Method& m : kFlowMethods) {
     const Run& r = runs[m.name].back();
     speed += fmt::format("{}{} {:.3f} in {:.2f} s", speed.empty() ? "" : "; ", m.name, r.at[2].error,
                          r.seconds_per_step * static_cast<double>(r.steps));
