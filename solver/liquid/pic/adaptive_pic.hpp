@@ -195,6 +195,9 @@ class AdaptivePic {
   /// Pressure by cell id after the last step (0 in air cells).
   std::span<const double> pressure() const { return p_; }
   const PhaseTimer& timer() const { return timer_; }
+  /// The last step's PPE: its matrix A over system.layout's unknowns; after advance() its b holds
+  /// the solution (the pressure), not the right-hand side.
+  const mac::PoissonSystem<Dim>& pressure_system() const { return system_; }
   double time() const { return time_; }
   long step() const { return step_; }
   double finest_h() const;
