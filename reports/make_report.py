@@ -6,7 +6,8 @@ Usage: make_report.py DIR
 Reads DIR/summary.json and, for every case in it, DIR/<case>.json and DIR/<case>.md (written by
 `liquid-verify suite`). Writes DIR/README.md: a summary table, then every case's tables and notes,
 with a log-log plot (PNG) of every error series a case records under "series", drawn with a
-second-order reference slope. Scene runs in DIR/frames/<scene>/ (liquid run --out, with
+second-order reference slope (linear axes for a series marked "scale": "linear", such as a
+quantity over time). Scene runs in DIR/frames/<scene>/ (liquid run --out, with
 DIR/frames/<scene>.json from --json) add a picture of their last frame and their Table 1 row;
 DIR/table1/table1.md (ci/bench-scenes) is included when present.
 """
@@ -38,11 +39,18 @@ def plot_series(case, series, out_dir):
         h_all, e_all = [], []
         x_label = entries[0].get("x_label", "h")
         y_label = entries[0].get("y_label", "L-inf error")
+        linear = entries[0].get("scale") == "linear"  # a quantity over time, say
         for entry in entries:
-            pts = [(h, e) for h, e in zip(entry["h"], entry["error"]) if h and e and e > 0]
+            if linear:
+                pts = list(zip(entry["h"], entry["error"]))
+            else:
+                pts = [(h, e) for h, e in zip(entry["h"], entry["error"]) if h and e and e > 0]
             if not pts:
                 continue
             hs, es = zip(*pts)
+            if linear:
+                ax.plot(hs, es, linewidth=1, label=entry["label"])
+                continue
             ax.loglog(hs, es, marker="o", markersize=3, linewidth=1, label=entry["label"])
             h_all += hs
             e_all += es

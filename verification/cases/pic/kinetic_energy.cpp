@@ -107,8 +107,10 @@ CaseResult run(const CaseOptions& options) {
       for (std::size_t i = 0; i < r.t.size(); i += std::max<std::size_t>(1, r.t.size() / 10))
         over_time.add_row({std::string(m.name), long(level), r.t[i], r.kinetic[i], r.total[i]});
       const std::string key = fmt::format("{} L{}", m.name, level);
-      series.push(series_entry(fmt::format("kinetic-energy: K / E(0) against t, level {}", level), m.name,
-                               r.t, r.kinetic, "t (s)", "kinetic energy / E(0)"));
+      Json curve = series_entry(fmt::format("kinetic-energy: K / E(0) against t, level {}", level), m.name,
+                                r.t, r.kinetic, "t (s)", "kinetic energy / E(0)");
+      curve.set("scale", "linear");
+      series.push(std::move(curve));
       if (level == first) {
         result.gate.push_back(
             {key + " energy lost by the end", GateFigure::Kind::error, 1.0 - r.total.back()});
