@@ -289,7 +289,7 @@ int main(int argc, char** argv) {
       LIQUID_VERIFY(
           a.overrides.method.empty() && a.overrides.adaptive < 0 && a.overrides.finest < 0 &&
               a.overrides.steps < 0 && a.overrides.until < 0 && a.overrides.surface.empty() &&
-              a.overrides.solver.empty() && a.overrides.amg_reuse < 0,
+              a.overrides.solver.empty() && a.overrides.amg_reuse == -1,
           "liquid run --resume continues the saved run as it was: --method, --regular, --adaptive, --finest, "
           "--surface, --solver, --amg-reuse, --steps and --until are refused with it");
     LIQUID_VERIFY(a.checkpoint_every == 0 || !a.out.empty(),

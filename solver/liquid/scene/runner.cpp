@@ -63,7 +63,12 @@ void apply_overrides(const SceneOverrides& o, Scene<Dim>& scene) {
     scene.ppe_solver_given = true;
   }
   if (!scene.ppe_solver_given) p.solver.kind = default_ppe_solver(p.adaptive, Dim);
-  if (o.amg_reuse >= 0) p.solver.amg.reuse_factor = o.amg_reuse;
+  if (o.amg_reuse != -1) {  // -1: keep the scene's; anything else must be a factor (NaN included)
+    LIQUID_VERIFY(std::isfinite(o.amg_reuse) && o.amg_reuse >= 0.0,
+                  "--amg-reuse {} must be 0 (a new AMG hierarchy every step) or a positive factor",
+                  o.amg_reuse);
+    p.solver.amg.reuse_factor = o.amg_reuse;
+  }
   LIQUID_VERIFY(!p.adaptive || p.transfer == PicTransfer::rbf,
                 "method '{}' runs on a regular grid only; drop --adaptive or use --method rbf",
                 to_string(p.transfer));

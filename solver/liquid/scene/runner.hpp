@@ -34,7 +34,7 @@ struct SceneOverrides {
   double until = -1;      ///< < 0 keeps the scene's end; else the end time
   std::string surface;    ///< "" keeps the scene's; else "air" or "levelset"
   std::string solver;     ///< "" keeps the scene's; else a PPE solver's name (linalg::solver_names())
-  double amg_reuse = -1;  ///< < 0 keeps the scene's; else AmgOptions::reuse_factor
+  double amg_reuse = -1;  ///< -1 keeps the scene's; else AmgOptions::reuse_factor (>= 0)
 };
 
 /// 2 or 3: the dimension of the run saved in a checkpoint file.
