@@ -240,14 +240,8 @@ CaseResult run(const CaseOptions& options) {
       "the paper's comparison (Sec. 6): adaptive against regular at the same finest h, tolerance 1e-6",
       {"study", "level", "adaptive solver", "regular solver", "speed-up", "iterations regular / adaptive",
        "the paper"});
-  const struct {
-    SolverKind adaptive, regular;
-    const char* claim;
-  } pairs[] = {{SolverKind::bicgstab_jacobi, SolverKind::cg_jacobi, "2.6x faster"},
-               {SolverKind::bicgstab_ilut, SolverKind::cg_ic, "2.5x faster, 3x fewer iterations"},
-               {SolverKind::bicgstab_amg, SolverKind::cg_amg, "(not in the paper)"}};
   for (const char* study : {"neumann-2d", "neumann-3d"})
-    for (const auto& pr : pairs) {
+    for (const SolverPair& pr : kPaperSolverPairs) {
       const auto a = results.find({study, "adaptive", pr.adaptive, 1e-6, -1});
       const auto r = results.find({study, "uniform", pr.regular, 1e-6, -1});
       if (a == results.end() || r == results.end()) continue;
