@@ -63,6 +63,37 @@ TEST(AdaptivePic, DamBreakRunsStableAndSpreads2D) {
   }
 }
 
+// PicOptions::refine keeps its region at the finest level with no surface anywhere (a box full of
+// liquid), through steps; far from it the tree stays at the coarse level.
+TEST(AdaptivePic, RefinedRegionStaysFineWithoutASurface) {
+  PicOptions<2> o;
+  o.gravity = Vec<2>::Zero();
+  o.fine_level = 5;
+  o.coarse_level = 3;
+  o.refine = levelset::box<2>({Vec<2>::Constant(0.4), Vec<2>::Constant(0.6)});
+  AdaptivePic<2> sim(o);
+  sim.seed([](const Vec<2>&) { return -1.0; },
+           [](const Vec<2>& x) { return Vec<2>(x[1] - 0.5, 0.5 - x[0]); });
+  for (int step = 0; step < 3; ++step) sim.advance(0.01);
+  const CellGraph<2>& g = sim.graph();
+  long inside = 0;
+  g.for_each_cell([&](CellId c) {
+    const Vec<2> x = g.centre(c);
+    if (o.refine(x) < 0.0) {
+      EXPECT_EQ(g.level(c), 5) << "cell " << c << " in the region";
+      ++inside;
+    }
+    if ((x - Vec<2>::Constant(0.5)).lpNorm<Eigen::Infinity>() > 0.45)
+      EXPECT_EQ(g.level(c), 3) << "cell " << c;
+  });
+  EXPECT_EQ(inside, 36);  // (0.2 / (1/32))^2 rounded to the cells whose centres are inside
+  PicOptions<2> plain = o;
+  plain.refine = {};
+  AdaptivePic<2> coarse(plain);
+  coarse.seed([](const Vec<2>&) { return -1.0; });
+  EXPECT_EQ(coarse.graph().n_cells(), 64);  // no surface, no region: level 3 everywhere
+}
+
 TEST(AdaptivePic, PhasesClassifyAndMarkTheBand) {
   // A pool on a tree: fluid where particles are, the surface row under the air, band marks.
   PicOptions<2> o;
