@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <memory>
 
 #include "liquid/core/error.hpp"
@@ -110,20 +111,64 @@ ReseedReport reseed(const CellGraph<Dim>& graph, std::span<const CellId> cells, 
   LIQUID_VERIFY(bins.n_particles() == particles.size(), "reseed: bins hold {} particles, there are {}",
                 bins.n_particles(), particles.size());
   ReseedReport report;
-  std::vector<std::uint8_t> remove(particles.size(), 0);
   std::vector<CellId> chosen;
   for (CellId c : cells) {
     if (!graph.alive(c)) continue;
     const int n = bins.count(c);
     if ((n == 0 && !options.fill_empty) || (n >= lo && n <= hi)) continue;
-    for (std::int32_t p : bins.of(c)) remove[p] = 1;
-    report.deleted += n;
     chosen.push_back(c);
   }
   std::sort(chosen.begin(), chosen.end());
   chosen.erase(std::unique(chosen.begin(), chosen.end()), chosen.end());
   report.cells = static_cast<long>(chosen.size());
   if (chosen.empty()) return report;
+  const auto pattern = halton_points<Dim>(per_cell);
+  // Per chosen cell, the pattern points that get a new particle; the particles to remove are marked.
+  std::vector<std::uint8_t> remove(particles.size(), 0);
+  std::vector<std::vector<Vec<Dim>>> added(chosen.size());
+  std::vector<Vec<Dim>> pts;
+  for (std::size_t k = 0; k < chosen.size(); ++k) {
+    const CellId c = chosen[k];
+    const auto own = bins.of(c);
+    cell_points(graph, c, pattern, options.jitter, options.seed, pts);
+    if (!options.keep) {
+      for (std::int32_t p : own) remove[p] = 1;
+      report.deleted += static_cast<long>(own.size());
+      added[k] = pts;
+    } else if (static_cast<int>(own.size()) > per_cell) {
+      // Crowded: keep, for each pattern point in turn, the nearest particle not kept yet.
+      std::vector<std::uint8_t> kept(own.size(), 0);
+      for (const auto& q : pts) {
+        std::size_t best = own.size();
+        double best_d = std::numeric_limits<double>::infinity();
+        for (std::size_t i = 0; i < own.size(); ++i) {
+          const double d = (particles.x[own[i]] - q).squaredNorm();
+          if (!kept[i] && d < best_d) best = i, best_d = d;
+        }
+        kept[best] = 1;
+      }
+      for (std::size_t i = 0; i < own.size(); ++i)
+        if (!kept[i]) remove[own[i]] = 1, ++report.deleted;
+    } else {
+      // Sparse: add at the pattern points farthest from the particles there so far.
+      std::vector<Vec<Dim>> have;
+      for (std::int32_t p : own) have.push_back(particles.x[p]);
+      std::vector<std::uint8_t> used(pts.size(), 0);
+      for (int n = static_cast<int>(own.size()); n < per_cell; ++n) {
+        std::size_t best = 0;
+        double best_d = -1.0;
+        for (std::size_t j = 0; j < pts.size(); ++j) {
+          if (used[j]) continue;
+          double d = std::numeric_limits<double>::infinity();
+          for (const auto& h : have) d = std::min(d, (h - pts[j]).squaredNorm());
+          if (d > best_d) best = j, best_d = d;
+        }
+        used[best] = 1;
+        have.push_back(pts[best]);
+        added[k].push_back(pts[best]);
+      }
+    }
+  }
 
   std::vector<std::int32_t> new_index;
   particles.compact(remove, &new_index);
@@ -131,15 +176,11 @@ ReseedReport reseed(const CellGraph<Dim>& graph, std::span<const CellId> cells, 
   for (std::size_t i = 0; i < new_index.size(); ++i)
     if (new_index[i] >= 0) cell_of[new_index[i]] = bins.cell[i];
   const int first = particles.size();
-  const auto pattern = halton_points<Dim>(per_cell);
-  std::vector<Vec<Dim>> pts;
-  for (CellId c : chosen) {
-    cell_points(graph, c, pattern, options.jitter, options.seed, pts);
-    for (const auto& p : pts) {
+  for (std::size_t k = 0; k < chosen.size(); ++k)
+    for (const auto& p : added[k]) {
       particles.push_back(p, Vec<Dim>::Zero());
-      cell_of.push_back(c);
+      cell_of.push_back(chosen[k]);
     }
-  }
   report.created = particles.size() - first;
   velocity(std::span<const Vec<Dim>>(particles.x).subspan(first),
            std::span<const CellId>(cell_of).subspan(first), std::span<Vec<Dim>>(particles.v).subspan(first));

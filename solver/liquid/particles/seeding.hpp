@@ -51,6 +51,11 @@ struct ReseedOptions {
   std::uint64_t seed = 1;
   bool fill_empty =
       false;  ///< also seed listed cells that hold no particle (holes the caller knows are fluid)
+  /// false (the paper): a reseeded cell's particles are all removed and per_cell new ones take their
+  /// place. true: a crowded cell keeps per_cell of its own particles (the one nearest each pattern
+  /// point) and a sparse one keeps all of its own and gets new ones at the pattern points farthest
+  /// from them, up to per_cell; only the new ones take the velocity source's values.
+  bool keep = false;
 };
 
 struct ReseedReport {
@@ -61,7 +66,8 @@ struct ReseedReport {
 
 /// Reseeds each cell of `cells` (the caller's fluid cells; the paper leaves surface cells alone)
 /// whose particle count is outside [lo, hi]: its particles are removed and per_cell Halton points
-/// take their place, with velocities from `velocity` (required). A cell with no particles is not
+/// take their place, with velocities from `velocity` (required); with options.keep, only the
+/// surplus is removed, or only the shortfall added. A cell with no particles is not
 /// fluid and is left alone, unless options.fill_empty says the caller knows it is. `bins` must be current; it
 /// is current again on return (new particles at the end, survivors in their old order). Deterministic.
 template <int Dim>

@@ -141,6 +141,11 @@ struct PicStepReport {
   linalg::SolveStats ppe;
   TransferReport p2g, g2p;
   long unknown_faces = 0;  ///< faces no particle reached, before extrapolation
+  /// Kinetic energy of the face velocities over the wet faces, 1/2 sum of u_f^2 A_f d_f (d_f the
+  /// distance between the two cell centres along the axis; density 1), before the projection (after
+  /// the forces) and after it. An orthogonal projection never raises it; the RBF-FD rows on a tree
+  /// are not D G, so `after > before` is possible there and is worth watching.
+  double grid_energy_before = 0.0, grid_energy_after = 0.0;
   AdvectReport advect;
   ReseedReport reseed;
 };
@@ -216,6 +221,7 @@ class AdaptivePic {
   void solve_pressure(PicStepReport& r);
   void project(double dt);
   void extrapolate();
+  double grid_energy() const;  ///< see PicStepReport::grid_energy_before
   void to_particles(PicStepReport& r);
   void advect(double dt, PicStepReport& r);
   void reseed(PicStepReport& r);

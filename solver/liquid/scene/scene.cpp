@@ -352,8 +352,8 @@ Scene<Dim> load_scene(const std::string& path) {
   {
     const toml::table* t = top.table("solver");
     const TableReader r(t ? *t : empty, path, "solver",
-                        {"method", "adaptive", "flip", "integrator", "reseed", "gravity", "extrapolation",
-                         "advect_cfl", "surface", "surface_radius"});
+                        {"method", "adaptive", "flip", "integrator", "reseed", "reseed_mode", "gravity",
+                         "extrapolation", "advect_cfl", "surface", "surface_radius"});
     o.transfer = parse_pic_transfer(r.choice("method", {"rbf", "pic", "flip", "apic"}, std::string("rbf")));
     o.adaptive = r.boolean("adaptive", o.transfer == PicTransfer::rbf);
     LIQUID_VERIFY(
@@ -365,6 +365,7 @@ Scene<Dim> load_scene(const std::string& path) {
     o.integrator = r.choice("integrator", {"rk2", "rk3"}, std::string("rk2")) == "rk2" ? Integrator::rk2
                                                                                        : Integrator::rk3;
     o.reseed = r.boolean("reseed", true);
+    o.reseeding.keep = r.choice("reseed_mode", {"replace", "keep"}, std::string("replace")) == "keep";
     o.gravity = r.vec<Dim>("gravity", PicOptions<Dim>::default_gravity());
     o.extrapolation_layers = static_cast<int>(r.integer_in("extrapolation", 1, 64, 4));
     o.advect_cfl = r.positive("advect_cfl", 1.0);

@@ -250,6 +250,63 @@ TYPED_TEST(ParticlesTest, ReseedingBringsEveryFluidCellIntoRange) {
   EXPECT_THROW(reseed<Dim>(g, cells, bad, source, p, bins), Error);
 }
 
+// keep: a crowded cell keeps 2^Dim of its own particles (velocities untouched), a sparse one keeps
+// all of its own and is topped up to 2^Dim; only the new particles take the source's velocities.
+TYPED_TEST(ParticlesTest, ReseedingThatKeepsChangesOnlyTheSurplusOrTheShortfall) {
+  constexpr int Dim = TypeParam::value;
+  const auto g = random_tree<Dim>(9);
+  Particles<Dim> p;
+  std::mt19937_64 rng(3);
+  std::uniform_int_distribution<int> count(1, 24);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::vector<int> before(g.cell_capacity(), 0);
+  g.for_each_cell([&](CellId c) {
+    const Box<Dim> b = g.box(c);
+    const int n = count(rng);
+    before[c] = n;
+    for (int i = 0; i < n; ++i) {
+      Vec<Dim> r;
+      for (int k = 0; k < Dim; ++k) r[k] = u(rng);
+      const Vec<Dim> x = b.lo + r.cwiseProduct(b.size());
+      p.push_back(x, -3.0 * x);  // the old particles' velocities: -3 x
+    }
+  });
+  CellBins bins;
+  bin_particles<Dim>(g, p.x, bins);
+  const auto source = [](std::span<const Vec<Dim>> x, std::span<const CellId>, std::span<Vec<Dim>> v) {
+    for (std::size_t i = 0; i < x.size(); ++i) v[i] = 2.0 * x[i];
+  };
+  ReseedOptions keep;
+  keep.keep = true;
+  const int lo = Dim == 2 ? 3 : 5, hi = Dim == 2 ? 12 : 15, full = 1 << Dim;
+  long crowded = 0, sparse = 0, surplus = 0, shortfall = 0;
+  g.for_each_cell([&](CellId c) {
+    crowded += before[c] > hi;
+    sparse += before[c] < lo;
+    if (before[c] > hi) surplus += before[c] - full;
+    if (before[c] < lo) shortfall += full - before[c];
+  });
+  ASSERT_GT(crowded, 5);
+  ASSERT_GT(sparse, 5);
+  const ReseedReport r = reseed<Dim>(g, g.cell_ids(), keep, source, p, bins);
+  EXPECT_EQ(r.cells, crowded + sparse);
+  EXPECT_EQ(r.deleted, surplus);
+  EXPECT_EQ(r.created, shortfall);
+  expect_bins_match_location<Dim>(g, p.x, bins);
+  g.for_each_cell([&](CellId c) {
+    const int n = bins.count(c);
+    if (before[c] < lo || before[c] > hi)
+      EXPECT_EQ(n, full) << "cell " << c;
+    else
+      EXPECT_EQ(n, before[c]) << "cell " << c;
+    int old = 0;
+    for (std::int32_t i : bins.of(c)) old += (p.v[i] + 3.0 * p.x[i]).norm() < 1e-12;
+    const int own = before[c] > hi ? full : before[c];  // sparse and in-range cells keep all theirs
+    EXPECT_EQ(old, own) << "cell " << c << ": its own particles kept";
+  });
+  for (int i = p.size() - static_cast<int>(r.created); i < p.size(); ++i) EXPECT_EQ(p.v[i], 2.0 * p.x[i]);
+}
+
 /// Error of one revolution of a rigid rotation about the origin.
 template <int Dim>
 double rotation_error(Integrator integrator, int steps) {

@@ -94,6 +94,29 @@ TEST(AdaptivePic, RefinedRegionStaysFineWithoutASurface) {
   EXPECT_EQ(coarse.graph().n_cells(), 64);  // no surface, no region: level 3 everywhere
 }
 
+// seed() settles the tree first and seeds it afterwards: every cell of a full box, split or not,
+// holds the seeding count, and every particle carries the given velocity. Seeding before the tree
+// settled left the split cells' children with one particle, or with new ones at rest.
+TEST(AdaptivePic, SeedingOnTheSettledTreeCarriesTheGivenVelocity) {
+  PicOptions<2> o;
+  o.gravity = Vec<2>::Zero();
+  o.fine_level = 5;
+  o.coarse_level = 3;
+  o.refine = levelset::box<2>({Vec<2>::Constant(0.3), Vec<2>::Constant(0.7)});
+  const auto swirl = [](const Vec<2>& x) -> Vec<2> { return {x[1] - 0.25, 0.75 - x[0]}; };
+  AdaptivePic<2> sim(o);
+  sim.seed([](const Vec<2>&) { return -1.0; }, swirl);
+  const CellGraph<2>& g = sim.graph();
+  ASSERT_GT(g.n_cells_at_level(5), 0);
+  std::vector<int> count(g.cell_capacity(), 0);
+  const Particles<2>& p = sim.particles();
+  for (int i = 0; i < p.size(); ++i) {
+    ++count[g.locate(p.x[i])];
+    EXPECT_LT((p.v[i] - swirl(p.x[i])).norm(), 1e-12) << "particle " << i;
+  }
+  g.for_each_cell([&](CellId c) { EXPECT_EQ(count[c], 4) << "cell " << c << " at level " << g.level(c); });
+}
+
 TEST(AdaptivePic, PhasesClassifyAndMarkTheBand) {
   // A pool on a tree: fluid where particles are, the surface row under the air, band marks.
   PicOptions<2> o;
