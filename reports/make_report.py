@@ -88,6 +88,8 @@ PAPER = {
     "ppe-solvers": "adaptive BiCGSTAB 2.6x (Jacobi) and 2.5x (ILU, 3x fewer iterations) faster than regular PCG (Sec. 6)",
     "vorticity": "RBF keeps vorticity like APIC, far better than PIC/FLIP (RBF Liquids, Fig. 11)",
     "kinetic-energy": "RBF keeps more kinetic energy than PIC and stays stable (RBF Liquids, Fig. 10)",
+    "vorticity-3d": "not in the paper (its Fig. 11 is 2D); the same claim in 3D",
+    "kinetic-energy-3d": "RBF keeps more kinetic energy than PIC and stays stable (RBF Liquids, Fig. 10, in 3D)",
     "conditioning": "adaptive PPE worse conditioned but fewer iterations, 68% fewer fluid cells (RBF Liquids, Fig. 13)",
     "ppe-in-scenes": "adaptive BiCGSTAB 2.6x (Jacobi) and 2.5x (ILU, 3x fewer iterations) faster than regular PCG (Sec. 6)",
 }
@@ -166,7 +168,8 @@ def main():
     scenes = scene_section(out_dir)
     table1 = out_dir / "table1" / "table1.md"
     if table1.exists():
-        scenes += "\n" + table1.read_text()
+        # Its pictures lie beside it, in table1/.
+        scenes += "\n" + table1.read_text().replace("](table1-", "](table1/table1-")
     report = "\n".join(lines) + "\n" + "\n".join(sections) + "\n" + scenes
     (out_dir / "README.md").write_text(report)
     return 0

@@ -12,6 +12,7 @@ paper's. Writes DIR/table1.md and prints it.
 """
 
 import json
+import math
 import pathlib
 import re
 import statistics
@@ -38,6 +39,138 @@ def median_run(runs):
     out["threads"] = runs[0]["threads"]
     out["repeats"] = len(runs)
     return out
+
+
+# The phases of a step as the bars and the growth fits show them: (label, keys summed).
+PHASES = [("grid", ("grid",)), ("laplacian", ("laplacian",)), ("ppe", ("ppe",)),
+          ("transfers", ("p2g", "g2p")), ("advect", ("advect",))]
+
+
+def phase_seconds(sec):
+    """Seconds per step of each phase of PHASES, and 'other' (the rest of 'total')."""
+    out = {label: sum(sec.get(k, 0.0) for k in keys) for label, keys in PHASES}
+    out["other"] = max(0.0, sec.get("total", 0.0) - sum(out.values()))
+    return out
+
+
+def pyplot():
+    try:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+        return plt
+    except ImportError:
+        print("table1: matplotlib missing (ci/setup installs python3-matplotlib); no plots", file=sys.stderr)
+        return None
+
+
+def phase_bars(groups, folder):
+    """Stacked bars of each phase's share of a step, one bar per run (scene, h, method)."""
+    plt = pyplot()
+    if plt is None:
+        return []
+    lines = []
+    for dim in (2, 3):
+        keys = sorted(k for k in groups if k[1] == dim)
+        if not keys:
+            continue
+        labels, stacks = [], []
+        for scene, _, level in keys:
+            for method in ("adaptive-rbf", "regular-rbf", "regular-apic"):
+                if method in groups[(scene, dim, level)]:
+                    r = median_run(groups[(scene, dim, level)][method])
+                    labels.append(f"{scene} 2^-{level}\n{method}")
+                    stacks.append(phase_seconds(r["sec"]))
+        # Shares of the step, stacked to 100%, with the step's seconds above each bar: sizes differ by
+        # orders of magnitude, and a log axis would distort the stack.
+        fig, ax = plt.subplots(figsize=(max(6.4, 0.55 * len(labels)), 4.8))
+        bottom = [0.0] * len(labels)
+        totals = [sum(s.values()) for s in stacks]
+        for phase in [p for p, _ in PHASES] + ["other"]:
+            values = [100.0 * s[phase] / t if t > 0 else 0.0 for s, t in zip(stacks, totals)]
+            ax.bar(range(len(labels)), values, bottom=bottom, label=phase)
+            bottom = [b + v for b, v in zip(bottom, values)]
+        for i, t in enumerate(totals):
+            ax.text(i, 101, f"{t:.3g} s", ha="center", va="bottom", fontsize=6, rotation=90)
+        ax.set_ylim(0, 125)
+        ax.set_xticks(range(len(labels)))
+        ax.set_xticklabels(labels, rotation=90, fontsize=6)
+        ax.set_ylabel("share of a step (%), seconds per step above")
+        ax.set_title(f"Table 1 runs ({dim}D): where a step's time goes")
+        ax.legend(fontsize=7)
+        fig.tight_layout()
+        name = f"table1-phases-{dim}d.png"
+        fig.savefig(folder / name, dpi=110)
+        plt.close(fig)
+        lines += ["", f"![seconds per step by phase, {dim}D]({name})"]
+    return lines
+
+
+def fit_exponent(xs, ys):
+    """Least-squares slope of log y against log x (points with y > 0)."""
+    pts = [(math.log(x), math.log(y)) for x, y in zip(xs, ys) if x > 0 and y > 0]
+    if len(pts) < 2:
+        return float("nan")
+    mx = sum(p[0] for p in pts) / len(pts)
+    my = sum(p[1] for p in pts) / len(pts)
+    sxx = sum((p[0] - mx) ** 2 for p in pts)
+    return sum((p[0] - mx) * (p[1] - my) for p in pts) / sxx if sxx > 0 else float("nan")
+
+
+def growth(groups, folder):
+    """Per scene, dimension and method with runs at 3 or more sizes: seconds per step of each phase
+    against particles, log-log, with the fitted exponent; phases growing faster than linearly
+    (exponent above 1.1) are named."""
+    series = {}
+    for (scene, dim, level), methods in groups.items():
+        for method, runs in methods.items():
+            series.setdefault((scene, dim, method), []).append((level, median_run(runs)))
+    rows, faster, plots = [], [], []
+    plt = pyplot()
+    for (scene, dim, method), runs in sorted(series.items()):
+        if len(runs) < 3:
+            continue
+        runs.sort()
+        particles = [r["particles"] for _, r in runs]
+        phases = [phase_seconds(r["sec"]) for _, r in runs]
+        totals = [r["sec"].get("total", 0.0) for _, r in runs]
+        exps = {label: fit_exponent(particles, [p[label] for p in phases]) for label, _ in PHASES}
+        exps["total"] = fit_exponent(particles, totals)
+        levels = ", ".join(f"2^-{l}" for l, _ in runs)
+        rows.append(f"| {scene}-{dim}d | {method} | {levels} | {particles[0]:.0f} - {particles[-1]:.0f} | "
+                    + " | ".join(f"{exps[k]:.2f}" for k in [p for p, _ in PHASES] + ["total"]) + " |")
+        faster += [f"{scene}-{dim}d {method}: {k} (exponent {v:.2f})" for k, v in exps.items()
+                   if k != "total" and v > 1.1]
+        if plt is not None:
+            fig, ax = plt.subplots(figsize=(6.4, 4.8))
+            for label, _ in PHASES:
+                ys = [p[label] for p in phases]
+                if any(y > 0 for y in ys):
+                    ax.loglog(particles, ys, marker="o", markersize=3, linewidth=1,
+                              label=f"{label} ({exps[label]:.2f})")
+            ax.loglog(particles, totals, "k-", marker="s", markersize=3, linewidth=1.5,
+                      label=f"total ({exps['total']:.2f})")
+            x0, x1 = particles[0], particles[-1]
+            ax.loglog([x0, x1], [totals[0], totals[0] * x1 / x0], "k:", linewidth=1, label="slope 1")
+            ax.set_xlabel("particles")
+            ax.set_ylabel("seconds per step")
+            ax.set_title(f"{scene}-{dim}d {method}: cost against work (fitted exponents)")
+            ax.legend(fontsize=7)
+            fig.tight_layout()
+            name = f"table1-growth-{scene}-{dim}d-{method}.png"
+            fig.savefig(folder / name, dpi=110)
+            plt.close(fig)
+            plots.append(f"![growth of {scene}-{dim}d {method}]({name})")
+    if not rows:
+        return ["", "No scene ran at 3 or more sizes: no growth fit (ci/bench-scenes runs them)."]
+    lines = ["", "### How each phase's cost grows with the work", "",
+             "Exponent b of seconds per step ~ particles^b, least squares over the sizes run (1 is linear).", "",
+             "| run | method | h | particles | " + " | ".join(p for p, _ in PHASES) + " | total |",
+             "| --- | --- | --- | --- | " + " | ".join("---:" for _ in PHASES) + " | ---: |"] + rows
+    lines += ["", "Faster than linear (exponent above 1.1): " + ("; ".join(faster) if faster else "none") + "."]
+    lines += [""] + plots
+    return lines
 
 
 def main():
@@ -77,16 +210,17 @@ def main():
             r = runs[method]
             sec = r["sec"]
             total = sec.get("total", 0.0)
-            cell_share = 100.0 * r["fluid_cells"] / reg["fluid_cells"] if reg else float("nan")
-            particle_share = 100.0 * r["particles"] / reg["particles"] if reg else float("nan")
+            # A size run adaptive only (for the growth fit) has no regular run to compare with.
+            cell_share = f'{100.0 * r["fluid_cells"] / reg["fluid_cells"]:.0f}%' if reg else "-"
+            particle_share = f'{100.0 * r["particles"] / reg["particles"]:.0f}%' if reg else "-"
             core_s = total * r["threads"] / r["particles"] if r["particles"] else float("nan")
             vs = ""
             if paper:
                 p = paper[0]
                 vs = f"{core_s / (p[10] * PAPER_CORES / p[4]):.2f}"
             lines.append(
-                f"| {scene}-{dim}d | 2^-{level} | {method} | {r['fluid_cells']:.0f} | {cell_share:.0f}% | "
-                f"{r['particles']:.0f} | {particle_share:.0f}% | {sec.get('grid', 0):.4f} | {sec.get('ppe', 0):.4f} | "
+                f"| {scene}-{dim}d | 2^-{level} | {method} | {r['fluid_cells']:.0f} | {cell_share} | "
+                f"{r['particles']:.0f} | {particle_share} | {sec.get('grid', 0):.4f} | {sec.get('ppe', 0):.4f} | "
                 f"{sec.get('laplacian', 0):.4f} | {sec.get('p2g', 0) + sec.get('g2p', 0):.4f} | "
                 f"{sec.get('advect', 0):.4f} | {total:.4f} | {100 * sec.get('grid', 0) / total if total else 0:.1f} | "
                 f"{1e6 * total / r['particles'] if r['particles'] else 0:.2f} | "
@@ -95,6 +229,8 @@ def main():
             lines.append(f"| paper {p[0]} | {p[1]} | adaptive (16 cores) | {p[2]:.0f} | {p[3]}% | {p[4]:.0f} | {p[5]}% | "
                          f"{p[6]:.2f} | {p[7]:.2f} | {p[8]:.2f} | {p[9]:.2f} | - | {p[10]:.2f} | "
                          f"{100 * p[6] / p[10]:.1f} | {1e6 * p[10] / p[4]:.2f} | {1e6 * p[10] / p[2]:.2f} | 16 | 1.00 |")
+    lines += phase_bars(groups, folder)
+    lines += growth(groups, folder)
     text = "\n".join(lines) + "\n"
     (folder / "table1.md").write_text(text)
     print(text)

@@ -4,7 +4,8 @@
 // closed tank [0, 1]^2 under g = 9.81 (density 1), run with dt = min(0.01, CFL 1) to t = 1.5 s at
 // finest level 5 (h = 1/32; full tier: to t = 2 s at levels 6 and 7). Methods: adaptive-rbf (the paper's;
 // band at the finest level, level 3 inside), regular-rbf, regular-pic, regular-flip (blend 0.95),
-// regular-apic (regular ones on the uniform tree at the finest level).
+// regular-apic (regular ones on the uniform tree at the finest level). kinetic-energy-3d (full tier
+// only): the dam-break-3d scene's column [0, 0.4] x [0, 0.6] x [0, 1] at finest level 4 to t = 1 s.
 // Measured from the particles, each standing for its share of the liquid's volume V (the column's,
 // which the flow keeps) by the volume of its cell (particle_volumes: a particle in a coarse cell
 // stands for more liquid than one in the band): kinetic energy K = sum w |v|^2 / 2, potential
@@ -33,7 +34,13 @@ namespace liquid::verification {
 namespace {
 
 constexpr double kGravity = 9.81;
-const Box<2> kColumn{Vec<2>::Zero(), Vec<2>(0.4, 0.6)};
+/// The column: [0, 0.4] x [0, 0.6] (x [0, 1] in 3D: the dam-break-3d scene's).
+template <int Dim>
+Box<Dim> column() {
+  Vec<Dim> hi = Vec<Dim>::Ones();
+  hi[0] = 0.4, hi[1] = 0.6;
+  return {Vec<Dim>::Zero(), hi};
+}
 
 using Method = FlowMethod;
 
@@ -42,9 +49,10 @@ struct Energies {
   double total() const { return kinetic + potential; }
 };
 
-Energies energies(const AdaptivePic<2>& sim, double volume) {
-  const Particles<2>& p = sim.particles();
-  const std::vector<double> w = particle_volumes<2>(sim.graph(), p.x, volume);
+template <int Dim>
+Energies energies(const AdaptivePic<Dim>& sim, double volume) {
+  const Particles<Dim>& p = sim.particles();
+  const std::vector<double> w = particle_volumes<Dim>(sim.graph(), p.x, volume);
   Energies e;
   for (int i = 0; i < p.size(); ++i) {
     e.kinetic += 0.5 * w[i] * p.v[i].squaredNorm();
@@ -61,15 +69,16 @@ struct Run {
   double largest_rise = 0;  ///< the largest such rise, relative
 };
 
+template <int Dim>
 Run run_method(const Method& m, int level, double end) {
-  PicOptions<2> o;
+  PicOptions<Dim> o;
   o.adaptive = m.adaptive;
   o.transfer = m.transfer;
   o.fine_level = level;
   o.coarse_level = m.adaptive ? 3 : level;
-  AdaptivePic<2> sim(o);
-  sim.seed(levelset::box<2>(kColumn));
-  const double volume = kColumn.size().prod();
+  AdaptivePic<Dim> sim(o);
+  sim.seed(levelset::box<Dim>(column<Dim>()));
+  const double volume = column<Dim>().size().prod();
   const double e0 = energies(sim, volume).total();
   Run run;
   run.t.push_back(0.0), run.kinetic.push_back(0.0), run.total.push_back(1.0);
@@ -97,19 +106,22 @@ Run run_method(const Method& m, int level, double end) {
   return run;
 }
 
+template <int Dim>
 CaseResult run(const CaseOptions& options) {
   CaseResult result;
-  Table table("dam break (2D): energy per method, relative to the initial total E(0) (potential)",
-              {"method", "level", "steps", "s/step", "peak K", "at t", "K falls to half at t", "K end",
-               "E end", "largest growth of E", "projections raising KE", "largest rise"});
+  Table table(
+      fmt::format("dam break ({}D): energy per method, relative to the initial total E(0) (potential)", Dim),
+      {"method", "level", "steps", "s/step", "peak K", "at t", "K falls to half at t", "K end", "E end",
+       "largest growth of E", "projections raising KE", "largest rise"});
   Table over_time("kinetic energy K / E(0) over time", {"method", "level", "t", "K", "E"});
   Json series = Json::array();
   std::map<std::string, Run> finest;
-  const int first = options.full ? 6 : 5, last = options.full ? 7 : 5;
-  const double end = options.full ? 2.0 : 1.5;
+  // 3D runs in the full tier only (kinetic-energy-3d), at level 4 to 1 s.
+  const int first = Dim == 3 ? 4 : options.full ? 6 : 5, last = Dim == 3 ? 4 : options.full ? 7 : 5;
+  const double end = Dim == 3 ? 1.0 : options.full ? 2.0 : 1.5;
   for (int level = first; level <= last; ++level)
     for (const Method& m : kFlowMethods) {
-      const Run r = run_method(m, level, end);
+      const Run r = run_method<Dim>(m, level, end);
       table.add_row({std::string(m.name), long(level), r.steps, r.seconds_per_step, r.peak, r.peak_time,
                      std::isnan(r.half_time) ? Table::Cell(std::string("not within the run"))
                                              : Table::Cell(r.half_time),
@@ -118,8 +130,9 @@ CaseResult run(const CaseOptions& options) {
       for (std::size_t i = 0; i < r.t.size(); i += std::max<std::size_t>(1, r.t.size() / 10))
         over_time.add_row({std::string(m.name), long(level), r.t[i], r.kinetic[i], r.total[i]});
       const std::string key = fmt::format("{} L{}", m.name, level);
-      Json curve = series_entry(fmt::format("kinetic-energy: K / E(0) against t, level {}", level), m.name,
-                                r.t, r.kinetic, "t (s)", "kinetic energy / E(0)");
+      Json curve = series_entry(
+          fmt::format("kinetic-energy{}: K / E(0) against t, level {}", Dim == 3 ? "-3d" : "", level), m.name,
+          r.t, r.kinetic, "t (s)", "kinetic energy / E(0)");
       curve.set("scale", "linear");
       series.push(std::move(curve));
       if (level == first) {
@@ -157,6 +170,11 @@ CaseResult run(const CaseOptions& options) {
 LIQUID_VERIFICATION_CASE({"kinetic-energy",
                           "dam break (2D): kinetic and total energy over time for adaptive RBF, regular RBF, "
                           "PIC, FLIP and APIC (Fig. 10)",
-                          true, run, no_options});
+                          true, run<2>, no_options});
+LIQUID_VERIFICATION_CASE(
+    {"kinetic-energy-3d",
+     "dam break (3D, level 4, to 1 s): kinetic and total energy over time for adaptive RBF, "
+     "regular RBF, PIC, FLIP and APIC",
+     false, run<3>, no_options});
 
 }  // namespace liquid::verification

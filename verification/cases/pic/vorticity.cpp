@@ -8,13 +8,14 @@
 // in the refined region [pi/4, 3pi/4]^2, where the vorticity peaks, one level coarser elsewhere),
 // regular-rbf (the same transfers on the uniform tree), and the regular baselines regular-pic,
 // regular-flip (blend 0.95), regular-apic, all at finest levels 3, 4, 5 (full tier: 4, 5, 6;
-// --levels changes them), h = pi / 2^level. 2D only: the 3D analogue (the same cells with w = 0 on
-// [0, pi]^3) is not built yet.
+// --levels changes them), h = pi / 2^level. vorticity-3d: the same cells with w = 0 on [0, pi]^3
+// (steady too: the flow does not depend on z), finest levels 2, 3 (full tier: 3, 4, 5).
 // Measured at t = T, 2T, 4T: kinetic energy retained (sum of w |v|^2 over the particles, w the
 // volume each stands for (particle_volumes), over its value at seeding), enstrophy retained (the
 // grid velocity after the projection, sampled on a 64 x 64 lattice of points by the same RBF
 // interpolation for every method, its vorticity by central differences, integrated, over the same
-// sampling of the exact field), the L-inf velocity error at those sample points, and its observed
+// sampling of the exact field; 3D: a 24^3 lattice and the whole curl), the L-inf velocity error at
+// those sample points, and its observed
 // order in h (least squares over the levels).
 // Expected (asserted): the particles' energy never grows for PIC and APIC by more than 5e-3 (the
 // noise of the particle shares, see kinetic-energy); RBF keeps more energy than PIC at 4T on the
@@ -24,7 +25,10 @@
 // to 1e-6 relative: the PPE's tolerance). Gated: energy and enstrophy retained and the velocity
 // error at 4T, per method and level.
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
+#include <map>
 
 #include <fmt/format.h>
 
@@ -43,41 +47,71 @@ constexpr int kSamples = 64;
 
 using Method = FlowMethod;
 
-Vec<2> exact(const Vec<2>& x) {
-  return {std::sin(x[0]) * std::cos(x[1]), -std::cos(x[0]) * std::sin(x[1])};
+/// The Taylor-Green cells; in 3D the same cells with w = 0 (independent of z).
+template <int Dim>
+Vec<Dim> exact(const Vec<Dim>& x) {
+  Vec<Dim> u = Vec<Dim>::Zero();
+  u[0] = std::sin(x[0]) * std::cos(x[1]);
+  u[1] = -std::cos(x[0]) * std::sin(x[1]);
+  return u;
 }
 
+/// Samples per axis of the lattice the grid velocity is read on.
+template <int Dim>
+constexpr int kSamplesPerAxis = Dim == 2 ? 64 : 24;
+
 /// Enstrophy (integral of the squared vorticity) and the L-inf distance from the exact field of a
-/// velocity sampled at the centres of a kSamples^2 lattice on [0, pi]^2.
+/// velocity sampled at the centres of a lattice of kSamplesPerAxis^Dim points on [0, pi]^Dim.
 struct Sampled {
   double enstrophy = 0.0, error = 0.0;
 };
 
-template <class F>
+template <int Dim, class F>
 Sampled sample(const F& velocity) {
-  const double d = M_PI / kSamples;
-  std::vector<Vec<2>> u(kSamples * kSamples);
+  constexpr int n = kSamplesPerAxis<Dim>;
+  const double d = M_PI / n;
+  const int total = Dim == 2 ? n * n : n * n * n;
+  std::vector<Vec<Dim>> u(total);
+  const auto index = [](const IVec<Dim>& i) {
+    return Dim == 2 ? i[0] * n + i[1] : (i[0] * n + i[1]) * n + i[Dim - 1];
+  };
   Sampled out;
-  for (int i = 0; i < kSamples; ++i)
-    for (int j = 0; j < kSamples; ++j) {
-      const Vec<2> x{(i + 0.5) * d, (j + 0.5) * d};
-      u[i * kSamples + j] = velocity(x);
-      out.error = std::max(out.error, (u[i * kSamples + j] - exact(x)).lpNorm<Eigen::Infinity>());
+  for (int k = 0; k < total; ++k) {
+    IVec<Dim> i;
+    for (int a = Dim - 1, r = k; a >= 0; --a, r /= n) i[a] = r % n;
+    Vec<Dim> x;
+    for (int a = 0; a < Dim; ++a) x[a] = (i[a] + 0.5) * d;
+    u[index(i)] = velocity(x);
+    out.error = std::max(out.error, (u[index(i)] - exact<Dim>(x)).template lpNorm<Eigen::Infinity>());
+  }
+  // The curl by central differences at the interior samples: du_b/dx_a.
+  for (int k = 0; k < total; ++k) {
+    IVec<Dim> i;
+    for (int a = Dim - 1, r = k; a >= 0; --a, r /= n) i[a] = r % n;
+    if ((i.array() == 0).any() || (i.array() == n - 1).any()) continue;
+    const auto grad = [&](int a, int b) {
+      IVec<Dim> hi = i, lo = i;
+      ++hi[a], --lo[a];
+      return (u[index(hi)][b] - u[index(lo)][b]) / (2 * d);
+    };
+    double w2 = 0.0;
+    if constexpr (Dim == 2) {
+      const double w = grad(0, 1) - grad(1, 0);
+      w2 = w * w;
+    } else {
+      const Vec<3> w{grad(1, 2) - grad(2, 1), grad(2, 0) - grad(0, 2), grad(0, 1) - grad(1, 0)};
+      w2 = w.squaredNorm();
     }
-  // Vorticity dv/dx - du/dy by central differences at the interior samples.
-  for (int i = 1; i + 1 < kSamples; ++i)
-    for (int j = 1; j + 1 < kSamples; ++j) {
-      const double dvdx = (u[(i + 1) * kSamples + j][1] - u[(i - 1) * kSamples + j][1]) / (2 * d);
-      const double dudy = (u[i * kSamples + j + 1][0] - u[i * kSamples + j - 1][0]) / (2 * d);
-      out.enstrophy += (dvdx - dudy) * (dvdx - dudy) * d * d;
-    }
+    out.enstrophy += w2 * std::pow(d, Dim);
+  }
   return out;
 }
 
 /// Twice the kinetic energy of the box's liquid, from the particles.
-double mean_square_speed(const AdaptivePic<2>& sim) {
-  const Particles<2>& p = sim.particles();
-  const std::vector<double> w = particle_volumes<2>(sim.graph(), p.x, M_PI * M_PI);
+template <int Dim>
+double mean_square_speed(const AdaptivePic<Dim>& sim) {
+  const Particles<Dim>& p = sim.particles();
+  const std::vector<double> w = particle_volumes<Dim>(sim.graph(), p.x, std::pow(M_PI, Dim));
   double sum = 0.0;
   for (int i = 0; i < p.size(); ++i) sum += w[i] * p.v[i].squaredNorm();
   return sum;
@@ -91,23 +125,54 @@ struct Run {
   double max_energy_gain = 0;  ///< largest KE(t) / KE(0) - 1 over the run
   double seconds_per_step = 0, particles = 0, cells = 0;
   long steps = 0;
-  long raised = 0;          ///< steps whose projection raised the grid's kinetic energy (> 1e-9)
-  double largest_rise = 0;  ///< the largest such rise, relative
+  long raised = 0;                       ///< steps whose projection raised the grid's kinetic energy (> 1e-9)
+  double largest_rise = 0;               ///< the largest such rise, relative
+  std::map<std::string, double> phases;  ///< seconds per phase over the run (the solver's timer)
+  double seconds() const { return seconds_per_step * static_cast<double>(steps); }
 };
 
+/// Seconds a method needs to reach the L-inf error `target`, from its runs' (error, seconds) at the
+/// levels: log-log interpolation between the two runs that bracket the target, or the least-squares
+/// power law over all runs when none do (`extrapolated` is then set).
+double seconds_at_error(const std::vector<Run>& runs, double target, bool& extrapolated) {
+  std::vector<std::pair<double, double>> pts;  // (log error, log seconds)
+  for (const Run& r : runs)
+    if (r.at[2].error > 0.0 && r.seconds() > 0.0)
+      pts.emplace_back(std::log(r.at[2].error), std::log(r.seconds()));
+  std::sort(pts.begin(), pts.end());
+  const double x = std::log(target);
+  extrapolated = false;
+  for (std::size_t i = 0; i + 1 < pts.size(); ++i)
+    if (pts[i].first <= x && x <= pts[i + 1].first && pts[i + 1].first > pts[i].first) {
+      const double f = (x - pts[i].first) / (pts[i + 1].first - pts[i].first);
+      return std::exp(pts[i].second + f * (pts[i + 1].second - pts[i].second));
+    }
+  extrapolated = true;
+  if (pts.size() < 2) return pts.empty() ? NAN : std::exp(pts[0].second);
+  double mx = 0, my = 0;
+  for (const auto& p : pts) mx += p.first, my += p.second;
+  mx /= static_cast<double>(pts.size()), my /= static_cast<double>(pts.size());
+  double sxx = 0, sxy = 0;
+  for (const auto& p : pts) sxx += (p.first - mx) * (p.first - mx), sxy += (p.first - mx) * (p.second - my);
+  const double slope = sxx > 0 ? sxy / sxx : 0.0;
+  return std::exp(my + slope * (x - mx));
+}
+
+template <int Dim>
 Run run_method(const Method& m, int level) {
-  PicOptions<2> o;
-  o.domain = Box<2>{Vec<2>::Zero(), Vec<2>::Constant(M_PI)};
-  o.gravity = Vec<2>::Zero();
+  PicOptions<Dim> o;
+  o.domain = Box<Dim>{Vec<Dim>::Zero(), Vec<Dim>::Constant(M_PI)};
+  o.gravity = Vec<Dim>::Zero();
   o.adaptive = m.adaptive;
   o.transfer = m.transfer;
   o.fine_level = level;
   o.coarse_level = m.adaptive ? level - 1 : level;
-  if (m.adaptive) o.refine = levelset::box<2>({Vec<2>::Constant(M_PI / 4), Vec<2>::Constant(3 * M_PI / 4)});
-  AdaptivePic<2> sim(o);
-  sim.seed([](const Vec<2>&) { return -1.0; }, exact);
+  if (m.adaptive)
+    o.refine = levelset::box<Dim>({Vec<Dim>::Constant(M_PI / 4), Vec<Dim>::Constant(3 * M_PI / 4)});
+  AdaptivePic<Dim> sim(o);
+  sim.seed([](const Vec<Dim>&) { return -1.0; }, exact<Dim>);
   const double e0 = mean_square_speed(sim);
-  const double z0 = sample(exact).enstrophy;
+  const double z0 = sample<Dim>(exact<Dim>).enstrophy;
   Run run;
   Stopwatch clock;
   int next = 0;
@@ -126,25 +191,32 @@ Run run_method(const Method& m, int level) {
     const double e = mean_square_speed(sim) / e0;
     run.max_energy_gain = std::max(run.max_energy_gain, e - 1.0);
     if (sim.time() >= marks[next] - 1e-9) {
-      const FaceVelocityField<2> field(sim.graph(), sim.face_velocity(), {}, TransferOptions::paper_rbf());
-      const Sampled s = sample([&](const Vec<2>& x) { return field(x); });
+      const FaceVelocityField<Dim> field(sim.graph(), sim.face_velocity(), {}, TransferOptions::paper_rbf());
+      const Sampled s = sample<Dim>([&](const Vec<Dim>& x) { return field(x); });
       run.at[next] = {e, s.enstrophy / z0, s.error};
       ++next;
     }
   }
   run.seconds_per_step = clock.seconds() / static_cast<double>(run.steps);
+  for (const auto& [name, entry] : sim.timer().entries()) run.phases[name] = entry.seconds;
   run.particles /= static_cast<double>(run.steps);
   run.cells /= static_cast<double>(run.steps);
   return run;
 }
 
+template <int Dim>
 CaseResult run(const CaseOptions& options) {
   CaseResult result;
-  const LevelRange levels = options.levels.value_or(options.full ? LevelRange{4, 6} : LevelRange{3, 5});
-  Table table("Taylor-Green cells, per method and finest level: what is kept at t = T, 2T, 4T (T = pi)",
-              {"method", "level", "h", "particles", "cells", "steps", "s/step", "KE T", "KE 2T", "KE 4T",
-               "enstrophy T", "enstrophy 2T", "enstrophy 4T", "L-inf |u - u*| 4T", "max KE gain",
-               "projections raising KE", "largest rise"});
+  const LevelRange levels =
+      options.levels.value_or(Dim == 2 ? (options.full ? LevelRange{4, 6} : LevelRange{3, 5})
+                                       : (options.full ? LevelRange{3, 5} : LevelRange{2, 3}));
+  Table table(
+      fmt::format(
+          "Taylor-Green cells ({}D), per method and finest level: what is kept at t = T, 2T, 4T (T = pi)",
+          Dim),
+      {"method", "level", "h", "particles", "cells", "steps", "s/step", "KE T", "KE 2T", "KE 4T",
+       "enstrophy T", "enstrophy 2T", "enstrophy 4T", "L-inf |u - u*| 4T", "max KE gain",
+       "projections raising KE", "largest rise"});
   Table orders("observed order of the L-inf velocity error in h (least squares over the levels)",
                {"method", "order at T", "order at 2T", "order at 4T"});
   std::map<std::string, std::vector<Run>> runs;
@@ -154,7 +226,7 @@ CaseResult run(const CaseOptions& options) {
   for (const Method& m : kFlowMethods) {
     std::vector<double> err4, seconds;
     for (int level = levels.first; level <= levels.last; ++level) {
-      const Run r = run_method(m, level);
+      const Run r = run_method<Dim>(m, level);
       runs[m.name].push_back(r);
       const double h = M_PI / std::ldexp(1.0, level);
       table.add_row({std::string(m.name), long(level), h, r.particles, r.cells, r.steps, r.seconds_per_step,
@@ -197,9 +269,11 @@ CaseResult run(const CaseOptions& options) {
       row.emplace_back(hs.size() >= 2 ? fit_order(hs, e) : 0.0);
     }
     orders.add_row(std::move(row));
-    series.push(series_entry("vorticity: L-inf velocity error at 4T against h", m.name, hs, err4));
-    series.push(series_entry("vorticity: run seconds against the L-inf velocity error at 4T", m.name, err4,
-                             seconds, "L-inf velocity error at 4T", "seconds to 4T"));
+    const char* name = Dim == 2 ? "vorticity" : "vorticity-3d";
+    series.push(
+        series_entry(fmt::format("{}: L-inf velocity error at 4T against h", name), m.name, hs, err4));
+    series.push(series_entry(fmt::format("{}: run seconds against the L-inf velocity error at 4T", name),
+                             m.name, err4, seconds, "L-inf velocity error at 4T", "seconds to 4T"));
   }
   // The paper's claims at the finest row.
   const Run& rbf = runs["adaptive-rbf"].back();
@@ -223,9 +297,46 @@ CaseResult run(const CaseOptions& options) {
                          r.seconds_per_step * static_cast<double>(r.steps));
   }
   result.notes.push_back("finest row, L-inf velocity error at 4T and seconds to get there: " + speed);
+  // Speed at equal error: what each regular method needs to reach the adaptive run's error.
+  Table equal(
+      "speed at equal error: seconds to 4T for each method at the adaptive RBF finest row's L-inf error",
+      {"method", "L-inf error at 4T", "seconds", "from", "adaptive / this"});
+  const double target = rbf.at[2].error;
+  double fastest = std::numeric_limits<double>::infinity();
+  std::string fastest_name;
+  for (const Method& m : kFlowMethods) {
+    bool extrapolated = false;
+    const double t = m.adaptive ? rbf.seconds() : seconds_at_error(runs[m.name], target, extrapolated);
+    equal.add_row({std::string(m.name), target, t,
+                   std::string(m.adaptive     ? "the run"
+                               : extrapolated ? "power law over the levels (extrapolated)"
+                                              : "log-log between two levels"),
+                   rbf.seconds() / t});
+    if (!m.adaptive && t < fastest) fastest = t, fastest_name = m.name;
+  }
+  // Which phases the adaptive run spends its time in, largest first.
+  std::vector<std::pair<double, std::string>> spent;
+  for (const auto& [name, seconds] : rbf.phases)
+    if (name != "total") spent.emplace_back(seconds, name);
+  std::sort(spent.rbegin(), spent.rend());
+  std::string where;
+  const double total = rbf.phases.count("total") ? rbf.phases.at("total") : rbf.seconds();
+  for (std::size_t i = 0; i < std::min<std::size_t>(3, spent.size()); ++i)
+    where += fmt::format("{}{} {:.0f}%", i ? ", " : "", spent[i].second, 100.0 * spent[i].first / total);
+  result.notes.push_back(
+      rbf.seconds() <= fastest
+          ? fmt::format(
+                "speed at equal error (L-inf {:.3f} at 4T): adaptive RBF {:.2f} s, as fast as or faster "
+                "than the fastest regular baseline ({} {:.2f} s): goal met",
+                target, rbf.seconds(), fastest_name, fastest)
+          : fmt::format(
+                "speed at equal error (L-inf {:.3f} at 4T): adaptive RBF {:.2f} s is {:.1f} times slower "
+                "than the fastest regular baseline ({} {:.2f} s): goal not met; its time goes to {}",
+                target, rbf.seconds(), rbf.seconds() / fastest, fastest_name, fastest, where));
   result.fields.set("series", std::move(series));
   result.tables.push_back(std::move(table));
   result.tables.push_back(std::move(orders));
+  result.tables.push_back(std::move(equal));
   return result;
 }
 
@@ -235,7 +346,14 @@ LIQUID_VERIFICATION_CASE({"vorticity",
                           "Taylor-Green cells in a closed box: energy, enstrophy and velocity error kept by "
                           "adaptive RBF, regular RBF, PIC, FLIP and APIC (Fig. 11)",
                           true,
-                          run,
+                          run<2>,
                           {Option::levels}});
+LIQUID_VERIFICATION_CASE(
+    {"vorticity-3d",
+     "Taylor-Green cells (w = 0) in a closed cube: energy, enstrophy and velocity error kept by "
+     "adaptive RBF, regular RBF, PIC, FLIP and APIC",
+     true,
+     run<3>,
+     {Option::levels}});
 
 }  // namespace liquid::verification
