@@ -33,6 +33,28 @@ double radical_inverse(int i, int b) {
   return r;
 }
 
+/// Appends lo..hi particles (uniformly at random) at uniform random points of every cell, with
+/// velocity v(x); returns the count per cell id.
+template <int Dim, class V>
+std::vector<int> random_fill(const CellGraph<Dim>& g, std::uint64_t seed, int lo, int hi, const V& v,
+                             Particles<Dim>& p) {
+  std::mt19937_64 rng(seed);
+  std::uniform_int_distribution<int> count(lo, hi);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::vector<int> n_of(g.cell_capacity(), 0);
+  g.for_each_cell([&](CellId c) {
+    const Box<Dim> b = g.box(c);
+    n_of[c] = count(rng);
+    for (int i = 0; i < n_of[c]; ++i) {
+      Vec<Dim> r;
+      for (int k = 0; k < Dim; ++k) r[k] = u(rng);
+      const Vec<Dim> x = b.lo + r.cwiseProduct(b.size());
+      p.push_back(x, v(x));
+    }
+  });
+  return n_of;
+}
+
 template <int Dim>
 CellGraph<Dim> random_tree(std::uint64_t seed, int jump = 2) {
   CellGraphOptions<Dim> options;
@@ -187,18 +209,7 @@ TYPED_TEST(ParticlesTest, ReseedingBringsEveryFluidCellIntoRange) {
   const auto g = random_tree<Dim>(5);
   // 0 to 24 particles per cell, at random.
   Particles<Dim> p;
-  std::mt19937_64 rng(11);
-  std::uniform_int_distribution<int> count(0, 24);
-  std::uniform_real_distribution<double> u(0.0, 1.0);
-  g.for_each_cell([&](CellId c) {
-    const Box<Dim> b = g.box(c);
-    const int n = count(rng);
-    for (int i = 0; i < n; ++i) {
-      Vec<Dim> r;
-      for (int k = 0; k < Dim; ++k) r[k] = u(rng);
-      p.push_back(b.lo + r.cwiseProduct(b.size()), Vec<Dim>::Constant(-7.0));
-    }
-  });
+  random_fill<Dim>(g, 11, 0, 24, [](const Vec<Dim>&) -> Vec<Dim> { return Vec<Dim>::Constant(-7.0); }, p);
   CellBins bins;
   bin_particles<Dim>(g, p.x, bins);
   const int lo = Dim == 2 ? 3 : 5, hi = Dim == 2 ? 12 : 15;
@@ -255,22 +266,9 @@ TYPED_TEST(ParticlesTest, ReseedingBringsEveryFluidCellIntoRange) {
 TYPED_TEST(ParticlesTest, ReseedingThatKeepsChangesOnlyTheSurplusOrTheShortfall) {
   constexpr int Dim = TypeParam::value;
   const auto g = random_tree<Dim>(9);
-  Particles<Dim> p;
-  std::mt19937_64 rng(3);
-  std::uniform_int_distribution<int> count(1, 24);
-  std::uniform_real_distribution<double> u(0.0, 1.0);
-  std::vector<int> before(g.cell_capacity(), 0);
-  g.for_each_cell([&](CellId c) {
-    const Box<Dim> b = g.box(c);
-    const int n = count(rng);
-    before[c] = n;
-    for (int i = 0; i < n; ++i) {
-      Vec<Dim> r;
-      for (int k = 0; k < Dim; ++k) r[k] = u(rng);
-      const Vec<Dim> x = b.lo + r.cwiseProduct(b.size());
-      p.push_back(x, -3.0 * x);  // the old particles' velocities: -3 x
-    }
-  });
+  Particles<Dim> p;  // the old particles' velocities: -3 x
+  const std::vector<int> before =
+      random_fill<Dim>(g, 3, 1, 24, [](const Vec<Dim>& x) -> Vec<Dim> { return -3.0 * x; }, p);
   CellBins bins;
   bin_particles<Dim>(g, p.x, bins);
   const auto source = [](std::span<const Vec<Dim>> x, std::span<const CellId>, std::span<Vec<Dim>> v) {
