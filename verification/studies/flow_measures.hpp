@@ -23,6 +23,19 @@ inline const FlowMethod kFlowMethods[] = {{"adaptive-rbf", true, PicTransfer::rb
                                           {"regular-flip", false, PicTransfer::flip},
                                           {"regular-apic", false, PicTransfer::apic}};
 
+/// How often a run's projections raised the kinetic energy of the face velocities
+/// (PicStepReport::grid_energy_before/after), and by how much at most (relative).
+struct ProjectionEnergy {
+  long raised = 0;       ///< steps whose projection raised it by more than 1e-9
+  double largest = 0.0;  ///< the largest relative rise
+  void add(const PicStepReport& r) {
+    if (r.grid_energy_before <= 0.0) return;
+    const double rise = r.grid_energy_after / r.grid_energy_before - 1.0;
+    raised += rise > 1e-9;
+    largest = rise > largest ? rise : largest;
+  }
+};
+
 /// The volume each particle at `x` stands for, all scaled to sum to `volume`: its cell's volume
 /// over the cell's particles, or over 2^Dim (what a full cell is seeded with) when the cell holds
 /// fewer (a surface cell, partly liquid). Seeding and reseeding count particles per cell whatever

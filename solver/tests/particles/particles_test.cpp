@@ -209,7 +209,8 @@ TYPED_TEST(ParticlesTest, ReseedingBringsEveryFluidCellIntoRange) {
   const auto g = random_tree<Dim>(5);
   // 0 to 24 particles per cell, at random.
   Particles<Dim> p;
-  random_fill<Dim>(g, 11, 0, 24, [](const Vec<Dim>&) -> Vec<Dim> { return Vec<Dim>::Constant(-7.0); }, p);
+  random_fill<Dim>(
+      g, 11, 0, 24, [](const Vec<Dim>&) -> Vec<Dim> { return Vec<Dim>::Constant(-7.0); }, p);
   CellBins bins;
   bin_particles<Dim>(g, p.x, bins);
   const int lo = Dim == 2 ? 3 : 5, hi = Dim == 2 ? 12 : 15;
@@ -267,8 +268,8 @@ TYPED_TEST(ParticlesTest, ReseedingThatKeepsChangesOnlyTheSurplusOrTheShortfall)
   constexpr int Dim = TypeParam::value;
   const auto g = random_tree<Dim>(9);
   Particles<Dim> p;  // the old particles' velocities: -3 x
-  const std::vector<int> before =
-      random_fill<Dim>(g, 3, 1, 24, [](const Vec<Dim>& x) -> Vec<Dim> { return -3.0 * x; }, p);
+  const std::vector<int> before = random_fill<Dim>(
+      g, 3, 1, 24, [](const Vec<Dim>& x) -> Vec<Dim> { return -3.0 * x; }, p);
   CellBins bins;
   bin_particles<Dim>(g, p.x, bins);
   const auto source = [](std::span<const Vec<Dim>> x, std::span<const CellId>, std::span<Vec<Dim>> v) {

@@ -65,8 +65,7 @@ struct Run {
   std::vector<double> t, kinetic, total;  ///< relative to E(0)
   double peak = 0.0, peak_time = 0.0, half_time = NAN, growth = 0.0, seconds_per_step = 0.0;
   long steps = 0;
-  long raised = 0;          ///< steps whose projection raised the grid's kinetic energy (> 1e-9)
-  double largest_rise = 0;  ///< the largest such rise, relative
+  ProjectionEnergy projection;  ///< how often the projection raised the grid's kinetic energy
 };
 
 template <int Dim>
@@ -88,11 +87,7 @@ Run run_method(const Method& m, int level, double end) {
     const double dt = std::min(sim.stable_dt(1.0, 0.01), end - sim.time());
     const PicStepReport step = sim.advance(dt);
     ++run.steps;
-    if (step.grid_energy_before > 0.0) {
-      const double rise = step.grid_energy_after / step.grid_energy_before - 1.0;
-      run.raised += rise > 1e-9;
-      run.largest_rise = std::max(run.largest_rise, rise);
-    }
+    run.projection.add(step);
     const Energies e = energies(sim, volume);
     const double k = e.kinetic / e0, total = e.total() / e0;
     run.t.push_back(sim.time()), run.kinetic.push_back(k), run.total.push_back(total);
@@ -125,8 +120,8 @@ CaseResult run(const CaseOptions& options) {
       table.add_row({std::string(m.name), long(level), r.steps, r.seconds_per_step, r.peak, r.peak_time,
                      std::isnan(r.half_time) ? Table::Cell(std::string("not within the run"))
                                              : Table::Cell(r.half_time),
-                     r.kinetic.back(), r.total.back(), r.growth, fmt::format("{} of {}", r.raised, r.steps),
-                     r.largest_rise});
+                     r.kinetic.back(), r.total.back(), r.growth,
+                     fmt::format("{} of {}", r.projection.raised, r.steps), r.projection.largest});
       for (std::size_t i = 0; i < r.t.size(); i += std::max<std::size_t>(1, r.t.size() / 10))
         over_time.add_row({std::string(m.name), long(level), r.t[i], r.kinetic[i], r.total[i]});
       const std::string key = fmt::format("{} L{}", m.name, level);
@@ -142,9 +137,9 @@ CaseResult run(const CaseOptions& options) {
       }
       if (!m.adaptive)
         result.expect(
-            r.largest_rise <= 1e-6,
+            r.projection.largest <= 1e-6,
             fmt::format("{}: the projection on the uniform tree raised the kinetic energy by {:.2e}", key,
-                        r.largest_rise));
+                        r.projection.largest));
       if (m.transfer == PicTransfer::pic || m.transfer == PicTransfer::apic)
         result.expect(r.growth <= 5e-3, fmt::format("{}: the total energy grew by {:.2e}", key, r.growth));
       else if (r.growth > 5e-3)
