@@ -1,0 +1,244 @@
+#include "liquid/sph/adaptive_sph.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "liquid/core/error.hpp"
+#include "liquid/sph/kernels.hpp"
+
+namespace liquid::sph {
+
+template <int Dim>
+void SphOptions<Dim>::check() const {
+  LIQUID_VERIFY(container.valid(), "sph: the container box must have lo < hi along every axis");
+  LIQUID_VERIFY(spacing > 0.0 && std::isfinite(spacing), "sph: the particle spacing must be positive, not {}",
+                spacing);
+  LIQUID_VERIFY(h_ratio > 1.0 && std::isfinite(h_ratio),
+                "sph: h (support radius / spacing) must be above 1, not {}", h_ratio);
+  LIQUID_VERIFY(fluid.rest_density > 0.0 && fluid.stiffness > 0.0 && fluid.viscosity >= 0.0,
+                "sph: rest density {} and stiffness {} must be positive and viscosity {} not negative",
+                fluid.rest_density, fluid.stiffness, fluid.viscosity);
+  LIQUID_VERIFY(max_level >= 0 && max_level <= 12, "sph: max_level must be within 0..12, not {}", max_level);
+  LIQUID_VERIFY(resample_every >= 1, "sph: resample_every must be at least 1, not {}", resample_every);
+  LIQUID_VERIFY(resampling.alpha > 0.0 && resampling.beta > resampling.alpha,
+                "sph: alpha = {} and beta = {} must satisfy 0 < alpha < beta", resampling.alpha,
+                resampling.beta);
+  LIQUID_VERIFY(gamma_degrees > 0.0 && gamma_degrees < 180.0,
+                "sph: gamma must be within (0, 180) degrees, not {}", gamma_degrees);
+  LIQUID_VERIFY(projection_bisections >= 0 && projection_bisections <= 30,
+                "sph: projection_bisections must be within 0..30, not {}", projection_bisections);
+  LIQUID_VERIFY(restitution >= 0.0 && restitution <= 1.0, "sph: restitution must be within [0, 1], not {}",
+                restitution);
+  LIQUID_VERIFY(gravity.allFinite(), "sph: gravity must be finite");
+}
+
+template <int Dim>
+AdaptiveSph<Dim>::AdaptiveSph(SphOptions<Dim> options) : options_(std::move(options)), rng_(options_.seed) {
+  options_.check();
+  options_.resampling.max_level = options_.max_level;
+  sizes_.radius = options_.h_ratio * options_.spacing;
+  sizes_.h_ratio = options_.h_ratio;
+  // The level-0 mass that gives a full lattice of spacing s the density rho_0.
+  const double s = options_.spacing, r = sizes_.radius;
+  const int reach = static_cast<int>(std::ceil(options_.h_ratio));
+  double sum = 0.0;
+  Eigen::Matrix<int, Dim, 1> k = Eigen::Matrix<int, Dim, 1>::Constant(-reach);
+  while (true) {
+    sum += Kernels<Dim>::poly6(s * k.template cast<double>().norm(), r);
+    int d = 0;
+    while (d < Dim && ++k[d] > reach) k[d] = -reach, ++d;
+    if (d == Dim) break;
+  }
+  sizes_.mass = options_.fluid.rest_density / sum;
+}
+
+template <int Dim>
+bool AdaptiveSph<Dim>::in_solid(const Vec<Dim>& x) const {
+  const double tol = 1e-12 * options_.container.size().maxCoeff();
+  if ((x.array() < options_.container.lo.array() - tol).any() ||
+      (x.array() > options_.container.hi.array() + tol).any())
+    return true;
+  for (const auto& obstacle : options_.obstacles)
+    if (obstacle(x) < 0.0) return true;
+  return false;
+}
+
+template <int Dim>
+void AdaptiveSph<Dim>::seed(const levelset::Function<Dim>& liquid, const Vec<Dim>& velocity) {
+  const double s = options_.spacing;
+  const Box<Dim>& box = options_.container;
+  Eigen::Matrix<long, Dim, 1> n;
+  for (int d = 0; d < Dim; ++d) n[d] = static_cast<long>(std::floor(box.size()[d] / s + 1e-9));
+  LIQUID_VERIFY(n.minCoeff() >= 1, "sph: the container is narrower than one particle spacing ({})", s);
+  Eigen::Matrix<long, Dim, 1> k = Eigen::Matrix<long, Dim, 1>::Zero();
+  const Vec<Dim> offset = box.lo + 0.5 * (box.size() - s * (n.template cast<double>() - Vec<Dim>::Ones()));
+  while (true) {
+    const Vec<Dim> x = offset + s * k.template cast<double>();
+    const double phi = liquid(x);
+    LIQUID_VERIFY(std::isfinite(phi), "sph: the liquid's level set is not finite at a lattice point");
+    if (phi < 0.0 && !in_solid(x)) p_.add(sizes_, x, velocity, 0, -phi);
+    int d = 0;
+    while (d < Dim && ++k[d] >= n[d]) k[d] = 0, ++d;
+    if (d == Dim) break;
+  }
+  LIQUID_VERIFY(p_.size() > 0,
+                "sph: the liquid region holds no lattice point of spacing {} inside the container", s);
+  if (!options_.adaptive) return;
+  for (int round = 0; round < 2 * options_.max_level + 2; ++round) {
+    const SphStepReport r = adapt_now();
+    if (r.resampling.split + r.resampling.merged == 0) break;
+  }
+}
+
+template <int Dim>
+void AdaptiveSph<Dim>::find_neighbours_now() {
+  tree_.build(p_.x);
+  nbrs_ = find_neighbours<Dim>(tree_, p_.x, p_.radius);
+}
+
+template <int Dim>
+SphStepReport AdaptiveSph<Dim>::adapt_now() {
+  SphStepReport report;
+  {
+    auto t = timer_.scope("neighbours");
+    find_neighbours_now();
+  }
+  {
+    auto t = timer_.scope("redistance");
+    report.redistancing = redistance<Dim>(p_, nbrs_, tree_, options_.projection_bisections);
+  }
+  report.resampled = true;
+  if (options_.adaptive) {
+    {
+      auto t = timer_.scope("elfs");
+      report.features = feature_size<Dim>(p_, nbrs_, options_.gamma_degrees);
+    }
+    auto t = timer_.scope("resample");
+    const SolidTest<Dim> solid = [this](const Vec<Dim>& x) { return in_solid(x); };
+    report.resampling = resample<Dim>(p_, nbrs_, sizes_, options_.resampling, solid, rng_);
+  }
+  report.particles = p_.size();
+  return report;
+}
+
+template <int Dim>
+void AdaptiveSph<Dim>::collide() {
+  const double margin = 0.5 * options_.spacing, e = options_.restitution;
+  const Box<Dim>& box = options_.container;
+  const int n = p_.size();
+#pragma omp parallel for schedule(static)
+  for (int i = 0; i < n; ++i) {
+    Vec<Dim>& x = p_.x[i];
+    Vec<Dim>& v = p_.v[i];
+    for (const auto& obstacle : options_.obstacles) {
+      const double phi = obstacle(x);
+      if (phi >= margin) continue;
+      Vec<Dim> g;
+      const double step = 1e-6 * options_.spacing;
+      for (int d = 0; d < Dim; ++d) {
+        Vec<Dim> a = x, b = x;
+        a[d] -= step, b[d] += step;
+        g[d] = (obstacle(b) - obstacle(a)) / (2.0 * step);
+      }
+      const double gn = g.norm();
+      if (!(gn > 0.0)) continue;
+      const Vec<Dim> nrm = g / gn;
+      x += (margin - phi) * nrm;
+      const double vn = v.dot(nrm);
+      if (vn < 0.0) v -= (1.0 + e) * vn * nrm;
+    }
+    for (int d = 0; d < Dim; ++d) {
+      if (x[d] < box.lo[d] + margin) {
+        x[d] = box.lo[d] + margin;
+        if (v[d] < 0.0) v[d] = -e * v[d];
+      } else if (x[d] > box.hi[d] - margin) {
+        x[d] = box.hi[d] - margin;
+        if (v[d] > 0.0) v[d] = -e * v[d];
+      }
+    }
+  }
+}
+
+template <int Dim>
+SphStepReport AdaptiveSph<Dim>::advance(double dt) {
+  LIQUID_VERIFY(dt > 0.0 && std::isfinite(dt), "sph: the time step must be positive and finite, not {}", dt);
+  auto total = timer_.scope("total");
+  {
+    auto t = timer_.scope("neighbours");
+    find_neighbours_now();
+  }
+  SphStepReport report;
+  report.pairs = nbrs_.n_pairs();
+  {
+    auto t = timer_.scope("forces");
+    compute_density<Dim>(p_, nbrs_, options_.fluid);
+    compute_accelerations<Dim>(p_, nbrs_, options_.fluid, options_.gravity);
+    for (int i = 0; i < p_.size(); ++i) {
+      LIQUID_VERIFY(std::isfinite(p_.density[i]) && p_.a[i].allFinite(),
+                    "sph: particle {} (level {}) at step {}, t = {}: density {}, acceleration not finite", i,
+                    int(p_.level[i]), steps_, time_, p_.density[i]);
+      report.max_density_error =
+          std::max(report.max_density_error, std::abs(p_.density[i] / options_.fluid.rest_density - 1.0));
+    }
+  }
+  if (steps_ % options_.resample_every == 0) {
+    {
+      auto t = timer_.scope("redistance");
+      report.redistancing = redistance<Dim>(p_, nbrs_, tree_, options_.projection_bisections);
+    }
+    report.resampled = true;
+    if (options_.adaptive) {
+      {
+        auto t = timer_.scope("elfs");
+        report.features = feature_size<Dim>(p_, nbrs_, options_.gamma_degrees);
+      }
+      auto t = timer_.scope("resample");
+      const SolidTest<Dim> solid = [this](const Vec<Dim>& x) { return in_solid(x); };
+      report.resampling = resample<Dim>(p_, nbrs_, sizes_, options_.resampling, solid, rng_);
+    }
+  }
+  {
+    auto t = timer_.scope("integrate");
+    const int n = p_.size();
+#pragma omp parallel for schedule(static)
+    for (int i = 0; i < n; ++i) {
+      p_.v[i] += dt * p_.a[i];
+      p_.x[i] += dt * p_.v[i];
+    }
+  }
+  {
+    auto t = timer_.scope("collisions");
+    collide();
+  }
+  time_ += dt;
+  ++steps_;
+  report.dt = dt;
+  report.particles = p_.size();
+  report.per_level.assign(options_.max_level + 1, 0);
+  for (int i = 0; i < p_.size(); ++i) {
+    ++report.per_level[std::min<int>(p_.level[i], options_.max_level)];
+    report.max_speed = std::max(report.max_speed, p_.v[i].norm());
+  }
+  return report;
+}
+
+template <int Dim>
+double AdaptiveSph<Dim>::stable_dt(double cfl, double max_dt) const {
+  const double s = options_.spacing;
+  const double c = std::sqrt(options_.fluid.stiffness / options_.fluid.rest_density);
+  double vmax = 0.0, amax = 0.0;
+  for (int i = 0; i < p_.size(); ++i)
+    vmax = std::max(vmax, p_.v[i].norm()), amax = std::max(amax, p_.a[i].norm());
+  double dt = std::min(max_dt, cfl * s / (c + vmax));
+  if (amax > 0.0) dt = std::min(dt, 0.25 * std::sqrt(s / amax));
+  if (options_.fluid.viscosity > 0.0)
+    dt = std::min(dt, 0.125 * options_.fluid.rest_density * s * s / options_.fluid.viscosity);
+  return dt;
+}
+
+template struct SphOptions<2>;
+template struct SphOptions<3>;
+template class AdaptiveSph<2>;
+template class AdaptiveSph<3>;
+
+}  // namespace liquid::sph

@@ -1,0 +1,111 @@
+#pragma once
+// AdaptiveSph<Dim>: the adaptively sampled particle fluid of Adams et al. 2007. A step reads as
+// named, timed phases (PhaseTimer names):
+//   neighbours  k-d tree over the positions and the symmetric neighbour lists
+//   forces      density, pressure, pair forces, gravity
+//   redistance  (every k-th step) particle-to-surface distances on the distance surface
+//   elfs        (every k-th step, adaptive) medial axis and extended local feature size
+//   resample    (every k-th step, adaptive) split and merge
+//   integrate   leap-frog: v += dt a, x += dt v (velocities live at half steps)
+//   collisions  particles pushed out of obstacles and back into the container, inward velocity removed
+//   total
+// With adaptive = false every particle stays at level 0 (the single-resolution simulation the paper
+// compares with); the distances are still redistanced, so both carry the same surface.
+
+#include <cstdint>
+#include <random>
+#include <vector>
+
+#include "liquid/core/timer.hpp"
+#include "liquid/levelset/levelset.hpp"
+#include "liquid/sph/distance_surface.hpp"
+#include "liquid/sph/feature_size.hpp"
+#include "liquid/sph/forces.hpp"
+#include "liquid/sph/neighbours.hpp"
+#include "liquid/sph/resample.hpp"
+#include "liquid/sph/sph_particles.hpp"
+
+namespace liquid::sph {
+
+template <int Dim>
+struct SphOptions {
+  Box<Dim> container;                              ///< the tank: particles stay inside it
+  std::vector<levelset::Function<Dim>> obstacles;  ///< solids, negative inside
+  Vec<Dim> gravity = Vec<Dim>::Unit(1) * -9.81;
+  FluidConstants fluid;
+  double spacing = 0.02;  ///< level-0 particle spacing (m); support radius = h_ratio * spacing
+  double h_ratio = 2.5;   ///< the paper's h
+  bool adaptive = true;
+  int max_level = 3;            ///< coarsest level a merge may make
+  int resample_every = 5;       ///< redistance / elfs / resample every k-th step (paper: 5)
+  ResampleOptions resampling;   ///< alpha, beta (max_level is taken from above)
+  double gamma_degrees = 60.0;  ///< medial-axis angle
+  int projection_bisections = 1;
+  double restitution = 0.0;  ///< normal velocity kept (reversed) at a wall
+  std::uint64_t seed = 1;    ///< the split directions' random stream
+
+  /// Throws liquid::Error naming the first impossible value.
+  void check() const;
+};
+
+struct SphStepReport {
+  double dt = 0.0;
+  int particles = 0;
+  std::vector<int> per_level;  ///< particles of each level after the step
+  long pairs = 0;              ///< neighbour pairs of the step
+  bool resampled = false;      ///< this step redistanced (and, adaptive, resampled)
+  RedistanceStats redistancing;
+  FeatureStats features;
+  ResampleStats resampling;
+  double max_speed = 0.0;
+  double max_density_error = 0.0;  ///< max |rho_i / rho_0 - 1| over particles, at the forces
+};
+
+template <int Dim>
+class AdaptiveSph {
+ public:
+  explicit AdaptiveSph(SphOptions<Dim> options);
+
+  /// Fills the liquid region (phi < 0) inside the container and outside the obstacles with a lattice
+  /// of level-0 particles (spacing `spacing`, half a spacing from the container's walls), distances
+  /// from phi; calibrates the level-0 mass so that a full lattice has density rho_0; when adaptive,
+  /// resamples at rest until no particle changes (at most 2 max_level + 2 rounds).
+  void seed(const levelset::Function<Dim>& liquid, const Vec<Dim>& velocity = Vec<Dim>::Zero());
+
+  SphStepReport advance(double dt);
+  /// dt by the speed of sound, the fastest particle, the largest acceleration and the viscosity:
+  /// min(cfl s / (c + |v|max), 0.25 sqrt(s / |a|max), 0.125 rho_0 s^2 / mu), capped at max_dt.
+  double stable_dt(double cfl = 0.4, double max_dt = 1e-3) const;
+
+  const SphParticles<Dim>& particles() const { return p_; }
+  SphParticles<Dim>& particles() { return p_; }
+  const Sizes& sizes() const { return sizes_; }
+  const SphOptions<Dim>& options() const { return options_; }
+  const PhaseTimer& timer() const { return timer_; }
+  double time() const { return time_; }
+  long steps() const { return steps_; }
+  /// True when x is inside an obstacle or outside the container (by more than round-off).
+  bool in_solid(const Vec<Dim>& x) const;
+  /// The total volume the particles stand for: sum m_i / rho_0.
+  double volume() const { return p_.total_mass() / options_.fluid.rest_density; }
+
+  /// One redistance + feature size + resample pass at the current positions (what every k-th step
+  /// does); returns what it did. Public for the cases that resample without moving.
+  SphStepReport adapt_now();
+
+ private:
+  void find_neighbours_now();
+  void collide();
+
+  SphOptions<Dim> options_;
+  Sizes sizes_;
+  SphParticles<Dim> p_;
+  PointTree<Dim> tree_;
+  NeighbourLists nbrs_;
+  PhaseTimer timer_;
+  std::mt19937_64 rng_;
+  double time_ = 0.0;
+  long steps_ = 0;
+};
+
+}  // namespace liquid::sph

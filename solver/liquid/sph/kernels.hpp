@@ -1,0 +1,84 @@
+#pragma once
+// The smoothing kernels of Müller, Charypar and Gross (2003) with support radius r, in 2D and 3D,
+// and the surface weight of Adams et al. (2007, Eq. 8). Pointwise functions of the offset x (or its
+// length q = |x|); each kernel integrates to 1 over its support.
+//
+//   poly6      W(q, r) = c (r^2 - q^2)^3                 density
+//   spiky      W(q, r) = c (r - q)^3                     pressure (its gradient does not vanish at 0)
+//   viscosity  lap W(q, r) = c (r - q)                   viscosity (only the Laplacian is used)
+//
+// Constants: poly6 315/(64 pi r^9) in 3D, 4/(pi r^8) in 2D; spiky 15/(pi r^6) in 3D, 10/(pi r^5) in 2D;
+// the viscosity Laplacian 45/(pi r^6) in 3D, 40/(pi r^5) in 2D. The 2D viscosity kernel is the one
+// whose 2D Laplacian is 40/(pi r^5)(r - q), zero with zero slope at q = r and normalised:
+//   W = c ((r/4)(q^2 - r^2) - (q^3 - r^3)/9 + (r^3/6) ln(r/q)).
+
+#include <cmath>
+#include <numbers>
+
+#include "liquid/core/types.hpp"
+
+namespace liquid::sph {
+
+template <int Dim>
+struct Kernels {
+  static_assert(Dim == 2 || Dim == 3);
+  static constexpr double pi = std::numbers::pi;
+
+  static double poly6(double q, double r) {
+    if (q >= r) return 0.0;
+    const double c = Dim == 3 ? 315.0 / (64.0 * pi * std::pow(r, 9)) : 4.0 / (pi * std::pow(r, 8));
+    const double s = r * r - q * q;
+    return c * s * s * s;
+  }
+
+  static double spiky(double q, double r) {
+    if (q >= r) return 0.0;
+    const double c = Dim == 3 ? 15.0 / (pi * std::pow(r, 6)) : 10.0 / (pi * std::pow(r, 5));
+    const double s = r - q;
+    return c * s * s * s;
+  }
+
+  /// The gradient of the spiky kernel with respect to x, at offset x (zero at x = 0 and beyond r).
+  static Vec<Dim> spiky_gradient(const Vec<Dim>& x, double r) {
+    const double q = x.norm();
+    if (q >= r || q == 0.0) return Vec<Dim>::Zero();
+    const double c = Dim == 3 ? 45.0 / (pi * std::pow(r, 6)) : 30.0 / (pi * std::pow(r, 5));
+    const double s = r - q;
+    return (-c * s * s / q) * x;
+  }
+
+  /// The viscosity kernel itself (for tests; the forces use its Laplacian only). Infinite at q = 0.
+  static double viscosity(double q, double r) {
+    if (q >= r) return 0.0;
+    if constexpr (Dim == 3) {
+      const double c = 15.0 / (2.0 * pi * r * r * r);
+      return c * (-q * q * q / (2.0 * r * r * r) + q * q / (r * r) + r / (2.0 * q) - 1.0);
+    } else {
+      const double c = 40.0 / (pi * std::pow(r, 5));
+      return c * ((r / 4.0) * (q * q - r * r) - (q * q * q - r * r * r) / 9.0 +
+                  (r * r * r / 6.0) * std::log(r / q));
+    }
+  }
+
+  static double viscosity_laplacian(double q, double r) {
+    if (q >= r) return 0.0;
+    const double c = Dim == 3 ? 45.0 / (pi * std::pow(r, 6)) : 40.0 / (pi * std::pow(r, 5));
+    return c * (r - q);
+  }
+};
+
+/// The surface weight of Eq. 8: (1 - (q/r)^2)^3 inside the support, 0 outside (not normalised).
+inline double surface_weight(double q, double r) {
+  if (q >= r) return 0.0;
+  const double s = 1.0 - (q * q) / (r * r);
+  return s * s * s;
+}
+
+/// d/dq of surface_weight.
+inline double surface_weight_slope(double q, double r) {
+  if (q >= r) return 0.0;
+  const double s = 1.0 - (q * q) / (r * r);
+  return -6.0 * q * s * s / (r * r);
+}
+
+}  // namespace liquid::sph

@@ -1,0 +1,58 @@
+#pragma once
+// Neighbourhoods of multi-level particles (Adams et al. 2007, Sec. 3): p_j is a neighbour of p_i when
+// |x_i - x_j| <= max(r_i, r_j), a symmetric relation, found with a k-d tree (nanoflann) rebuilt once
+// per step. PointTree also answers the radius and nearest-point queries of the surface and the
+// feature-size estimate.
+
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <utility>
+#include <vector>
+
+#include "liquid/core/types.hpp"
+
+namespace liquid::sph {
+
+/// A k-d tree over a fixed set of points (the points are copied).
+template <int Dim>
+class PointTree {
+ public:
+  PointTree();
+  explicit PointTree(std::span<const Vec<Dim>> points);
+  ~PointTree();
+  PointTree(PointTree&&) noexcept;
+  PointTree& operator=(PointTree&&) noexcept;
+
+  /// Rebuilds the tree over `points`.
+  void build(std::span<const Vec<Dim>> points);
+  int size() const;
+  /// Indices of the points with |p - x| < radius, with their squared distances, in no fixed order.
+  void within(const Vec<Dim>& x, double radius, std::vector<std::pair<std::uint32_t, double>>& out) const;
+  /// The index of the point nearest x and its distance; (-1, inf) for an empty tree.
+  std::pair<int, double> nearest(const Vec<Dim>& x) const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+/// Symmetric neighbour lists in compressed rows: the neighbours of i (never i itself) are
+/// index[begin[i] .. begin[i+1]), in ascending index order.
+struct NeighbourLists {
+  std::vector<std::int64_t> begin{0};
+  std::vector<std::int32_t> index;
+
+  int n_particles() const { return static_cast<int>(begin.size()) - 1; }
+  std::span<const std::int32_t> of(int i) const {
+    return {index.data() + begin[i], static_cast<std::size_t>(begin[i + 1] - begin[i])};
+  }
+  long n_pairs() const { return static_cast<long>(index.size()) / 2; }
+};
+
+/// Finds every pair with |x_i - x_j| < max(r_i, r_j). `tree` must hold exactly the points x. OpenMP.
+template <int Dim>
+NeighbourLists find_neighbours(const PointTree<Dim>& tree, std::span<const Vec<Dim>> x,
+                               std::span<const double> radius);
+
+}  // namespace liquid::sph

@@ -1,0 +1,226 @@
+#include "liquid/sph/resample.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include <Eigen/Geometry>
+
+#include "liquid/core/error.hpp"
+
+namespace liquid::sph {
+
+namespace {
+
+/// Candidate split directions (up to sign): a half circle of angles in 2D, a Fibonacci sphere in 3D.
+template <int Dim>
+std::vector<Vec<Dim>> base_directions() {
+  std::vector<Vec<Dim>> dirs;
+  if constexpr (Dim == 2) {
+    const int k = 180;
+    for (int i = 0; i < k; ++i) {
+      const double t = std::numbers::pi * i / k;
+      dirs.push_back(Vec<2>(std::cos(t), std::sin(t)));
+    }
+  } else {
+    const int k = 600;
+    const double golden = std::numbers::pi * (3.0 - std::sqrt(5.0));
+    for (int i = 0; i < k; ++i) {
+      const double z = 1.0 - 2.0 * (i + 0.5) / k, rho = std::sqrt(1.0 - z * z);
+      dirs.push_back(Vec<3>(rho * std::cos(golden * i), rho * std::sin(golden * i), z));
+    }
+  }
+  return dirs;
+}
+
+/// The candidates turned by a random rotation (a random angle in 2D, a random unit quaternion in 3D).
+template <int Dim>
+std::vector<Vec<Dim>> turned(const std::vector<Vec<Dim>>& base, std::mt19937_64& rng) {
+  std::vector<Vec<Dim>> out(base.size());
+  if constexpr (Dim == 2) {
+    std::uniform_real_distribution<double> angle(0.0, std::numbers::pi / base.size());
+    const double t = angle(rng), c = std::cos(t), s = std::sin(t);
+    for (std::size_t i = 0; i < base.size(); ++i)
+      out[i] = Vec<2>(c * base[i][0] - s * base[i][1], s * base[i][0] + c * base[i][1]);
+  } else {
+    std::normal_distribution<double> g;
+    Eigen::Quaterniond q(g(rng), g(rng), g(rng), g(rng));
+    q.normalize();
+    const Eigen::Matrix3d R = q.toRotationMatrix();
+    for (std::size_t i = 0; i < base.size(); ++i) out[i] = R * base[i];
+  }
+  return out;
+}
+
+template <int Dim>
+struct Pass {
+  SphParticles<Dim>& p;
+  const NeighbourLists& nbrs;
+  const Sizes& sizes;
+  const SolidTest<Dim>& solid;
+  const int n_old;
+  std::vector<char> removed;
+  std::vector<std::vector<int>> born_of;  ///< per old particle: the new particles made from or beside it
+  ResampleStats stats;
+
+  Pass(SphParticles<Dim>& p_, const NeighbourLists& nbrs_, const Sizes& sizes_, const SolidTest<Dim>& solid_)
+      : p(p_),
+        nbrs(nbrs_),
+        sizes(sizes_),
+        solid(solid_),
+        n_old(p_.size()),
+        removed(p_.size(), 0),
+        born_of(p_.size()) {
+    LIQUID_VERIFY(nbrs.n_particles() == n_old, "resample: {} particles, neighbour lists for {}", n_old,
+                  nbrs.n_particles());
+  }
+
+  bool in_solid(const Vec<Dim>& x) const { return solid && solid(x); }
+
+  /// The distance from x to the nearest live particle around old particle i (i itself and `skip`
+  /// excluded), old or new.
+  double clearance(const Vec<Dim>& x, int i, int skip = -1) const {
+    double best = SphParticles<Dim>::infinity;
+    auto look = [&](int k) {
+      for (int b : born_of[k]) best = std::min(best, (p.x[b] - x).norm());
+    };
+    look(i);
+    for (int j : nbrs.of(i)) {
+      if (j != skip && !removed[j]) best = std::min(best, (p.x[j] - x).norm());
+      look(j);
+    }
+    return best;
+  }
+
+  void split(int i, const std::vector<Vec<Dim>>& base, std::mt19937_64& rng) {
+    const int level = p.level[i];
+    const double nominal = sizes.spacing_of<Dim>(level - 1) / 2.0;  // r_child / (2h)
+    const Vec<Dim> out = p.foot[i] - p.x[i];
+    const double out_len = out.norm();
+    const bool plane = out_len > 0.0 && std::isfinite(out_len);
+    const std::vector<Vec<Dim>> dirs = turned(base, rng);
+    std::vector<int> valid;
+    double d = nominal;
+    for (int attempt = 0; attempt < 12; ++attempt, d *= 0.8) {
+      valid.clear();
+      for (int k = 0; k < static_cast<int>(dirs.size()); ++k) {
+        bool ok = true;
+        for (double sgn : {1.0, -1.0}) {
+          const Vec<Dim> c = p.x[i] + sgn * d * dirs[k];
+          if (clearance(c, i) < d || in_solid(c) || (plane && (p.foot[i] - c).dot(out) <= 0.0)) {
+            ok = false;
+            break;
+          }
+        }
+        if (ok) valid.push_back(k);
+      }
+      if (!valid.empty()) break;
+    }
+    if (valid.empty()) {
+      ++stats.split_skipped;
+      return;
+    }
+    std::uniform_int_distribution<int> pick(0, static_cast<int>(valid.size()) - 1);
+    const Vec<Dim> u = dirs[valid[pick(rng)]];
+    if (d < nominal) ++stats.lowered;
+    const Vec<Dim> x0 = p.x[i], v0 = p.v[i], a0 = p.a[i], foot = p.foot[i];
+    const double elfs = p.elfs[i];
+    removed[i] = 1;
+    for (double sgn : {1.0, -1.0}) {
+      const Vec<Dim> c = x0 + sgn * d * u;
+      stats.closest_child_ratio = std::min(stats.closest_child_ratio, clearance(c, i) / nominal);
+      const double dist = plane ? std::max(0.0, (foot - c).dot(out) / out_len) : 0.0;
+      const int k = p.add(sizes, c, v0, level - 1, dist);
+      p.a[k] = a0, p.foot[k] = foot, p.elfs[k] = elfs;
+      born_of[i].push_back(k);
+    }
+    ++stats.split;
+  }
+
+  /// Merges i with the first marked neighbour of its level that can; false when none can.
+  bool merge(int i, const std::vector<char>& marked) {
+    const int level = p.level[i];
+    const double clear = sizes.spacing_of<Dim>(level + 1) / 2.0;  // r_new / (2h)
+    for (int j : nbrs.of(i)) {
+      if (j >= n_old || removed[j] || !marked[j] || p.level[j] != level) continue;
+      const Vec<Dim> c = 0.5 * (p.x[i] + p.x[j]);
+      if (in_solid(c)) continue;
+      if (std::min(clearance(c, i, j), clearance(c, j, i)) < clear) continue;
+      const double mi = p.mass[i], mj = p.mass[j];
+      const Vec<Dim> v = (mi * p.v[i] + mj * p.v[j]) / (mi + mj), a = (mi * p.a[i] + mj * p.a[j]) / (mi + mj);
+      const double dist = 0.5 * (p.distance[i] + p.distance[j]), elfs = std::min(p.elfs[i], p.elfs[j]);
+      const Vec<Dim> foot = p.distance[i] <= p.distance[j] ? p.foot[i] : p.foot[j];
+      removed[i] = removed[j] = 1;
+      const int k = p.add(sizes, c, v, level + 1, dist);
+      p.a[k] = a, p.foot[k] = foot, p.elfs[k] = elfs;
+      born_of[i].push_back(k), born_of[j].push_back(k);
+      ++stats.merged;
+      return true;
+    }
+    return false;
+  }
+
+  ResampleStats finish() {
+    std::vector<char> alive(p.size(), 1);
+    for (int i = 0; i < n_old; ++i) alive[i] = !removed[i];
+    p.keep(alive);
+    return stats;
+  }
+};
+
+}  // namespace
+
+template <int Dim>
+ResampleStats split_marked(SphParticles<Dim>& p, const NeighbourLists& nbrs, const Sizes& sizes,
+                           const std::vector<char>& marked, const SolidTest<Dim>& solid,
+                           std::mt19937_64& rng) {
+  Pass<Dim> pass(p, nbrs, sizes, solid);
+  const std::vector<Vec<Dim>> base = base_directions<Dim>();
+  for (int i = 0; i < pass.n_old; ++i)
+    if (marked[i] && p.level[i] > 0) pass.split(i, base, rng);
+  return pass.finish();
+}
+
+template <int Dim>
+ResampleStats merge_marked(SphParticles<Dim>& p, const NeighbourLists& nbrs, const Sizes& sizes,
+                           const std::vector<char>& marked, int max_level, const SolidTest<Dim>& solid) {
+  Pass<Dim> pass(p, nbrs, sizes, solid);
+  for (int i = 0; i < pass.n_old; ++i)
+    if (marked[i] && !pass.removed[i] && p.level[i] < max_level && !pass.merge(i, marked))
+      ++pass.stats.merge_skipped;
+  return pass.finish();
+}
+
+template <int Dim>
+ResampleStats resample(SphParticles<Dim>& p, const NeighbourLists& nbrs, const Sizes& sizes,
+                       const ResampleOptions& options, const SolidTest<Dim>& solid, std::mt19937_64& rng) {
+  LIQUID_VERIFY(options.alpha > 0.0 && options.beta > options.alpha,
+                "resample: alpha = {} and beta = {} must satisfy 0 < alpha < beta", options.alpha,
+                options.beta);
+  Pass<Dim> pass(p, nbrs, sizes, solid);
+  const int n = pass.n_old;
+  std::vector<char> to_merge(n, 0);
+  for (int i = 0; i < n; ++i)
+    to_merge[i] = p.elfs[i] > options.beta * p.radius[i] && p.level[i] < options.max_level;
+  const std::vector<Vec<Dim>> base = base_directions<Dim>();
+  for (int i = 0; i < n; ++i)
+    if (p.level[i] > 0 && p.elfs[i] < options.alpha * p.radius[i]) pass.split(i, base, rng);
+  for (int i = 0; i < n; ++i)
+    if (to_merge[i] && !pass.removed[i] && !pass.merge(i, to_merge)) ++pass.stats.merge_skipped;
+  return pass.finish();
+}
+
+template ResampleStats resample<2>(SphParticles<2>&, const NeighbourLists&, const Sizes&,
+                                   const ResampleOptions&, const SolidTest<2>&, std::mt19937_64&);
+template ResampleStats resample<3>(SphParticles<3>&, const NeighbourLists&, const Sizes&,
+                                   const ResampleOptions&, const SolidTest<3>&, std::mt19937_64&);
+template ResampleStats split_marked<2>(SphParticles<2>&, const NeighbourLists&, const Sizes&,
+                                       const std::vector<char>&, const SolidTest<2>&, std::mt19937_64&);
+template ResampleStats split_marked<3>(SphParticles<3>&, const NeighbourLists&, const Sizes&,
+                                       const std::vector<char>&, const SolidTest<3>&, std::mt19937_64&);
+template ResampleStats merge_marked<2>(SphParticles<2>&, const NeighbourLists&, const Sizes&,
+                                       const std::vector<char>&, int, const SolidTest<2>&);
+template ResampleStats merge_marked<3>(SphParticles<3>&, const NeighbourLists&, const Sizes&,
+                                       const std::vector<char>&, int, const SolidTest<3>&);
+
+}  // namespace liquid::sph

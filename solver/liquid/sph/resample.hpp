@@ -1,0 +1,65 @@
+#pragma once
+// Feature-size resampling of Adams et al. 2007, Sec. 4.2: split a particle when elfs < alpha r_i,
+// merge when elfs > beta r_i (alpha = 2, beta = 3).
+//
+// Split: a level-l particle becomes two of level l - 1, symmetric about it at distance
+// d = r_child / (2h), along a direction that keeps both children at least d from every other particle
+// (old ones and those made earlier in the same pass) and inside the liquid (on the liquid's side of
+// the parent's footpoint tangent plane, and outside every obstacle). Valid directions are found by
+// testing a set of candidate directions (2D: 180 angles; 3D: 600 quasi-uniform points on the sphere,
+// rotated at random per split) and one is picked at random; when none is valid, d is lowered by 20%
+// and the search repeated (at most 12 times, then the split is skipped and counted). Children keep
+// the parent's velocity and acceleration: mass and momentum are conserved exactly.
+// Merge: two neighbours of the same level, both marked, become one of level l + 1 at their midpoint
+// when no other particle is within r_new / (2h) of it and it is outside every obstacle; otherwise the
+// next marked neighbour is tried. The new velocity (and acceleration) is the mass-weighted mean.
+
+#include <cstdint>
+#include <functional>
+#include <random>
+
+#include "liquid/sph/neighbours.hpp"
+#include "liquid/sph/sph_particles.hpp"
+
+namespace liquid::sph {
+
+struct ResampleOptions {
+  double alpha = 2.0;  ///< split when elfs < alpha r_i
+  double beta = 3.0;   ///< merge when elfs > beta r_i
+  int max_level = 3;   ///< no merge above this level
+};
+
+struct ResampleStats {
+  long split = 0;          ///< particles split (each into two)
+  long merged = 0;         ///< pairs merged (each into one)
+  long split_skipped = 0;  ///< marked for a split but no valid placement at any tried distance
+  long merge_skipped = 0;  ///< marked for a merge but no partner could merge
+  long lowered = 0;        ///< splits placed closer than r_child / (2h)
+  /// The smallest (distance from a new child to its nearest other particle) / (r_child / (2h)) over
+  /// the pass: 1 unless a split had to lower d. Infinite when nothing was split.
+  double closest_child_ratio = SphParticles<2>::infinity;
+};
+
+/// A solid test: true when x is inside an obstacle (or outside the container).
+template <int Dim>
+using SolidTest = std::function<bool(const Vec<Dim>&)>;
+
+/// Splits and merges by p.elfs (and p.foot for the tangent-plane test); `nbrs` are the lists of the
+/// current positions. New particles are appended, replaced ones removed: indices change.
+template <int Dim>
+ResampleStats resample(SphParticles<Dim>& p, const NeighbourLists& nbrs, const Sizes& sizes,
+                       const ResampleOptions& options, const SolidTest<Dim>& solid, std::mt19937_64& rng);
+
+/// Splits particle-by-particle regardless of elfs (for tests and cases): every particle whose flag is
+/// set and whose level is above 0; the same placement rules as resample().
+template <int Dim>
+ResampleStats split_marked(SphParticles<Dim>& p, const NeighbourLists& nbrs, const Sizes& sizes,
+                           const std::vector<char>& marked, const SolidTest<Dim>& solid,
+                           std::mt19937_64& rng);
+
+/// Merges marked pairs regardless of elfs (for tests and cases); the same rules as resample().
+template <int Dim>
+ResampleStats merge_marked(SphParticles<Dim>& p, const NeighbourLists& nbrs, const Sizes& sizes,
+                           const std::vector<char>& marked, int max_level, const SolidTest<Dim>& solid);
+
+}  // namespace liquid::sph

@@ -1,0 +1,318 @@
+// Unit tests of solver/liquid/sph: kernels, neighbourhoods, symmetric forces, the distance surface and
+// its redistancing, the feature size, and the conservation of split and merge.
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+#include <random>
+
+#include "liquid/core/error.hpp"
+#include "liquid/levelset/levelset.hpp"
+#include "liquid/sph/adaptive_sph.hpp"
+#include "liquid/sph/distance_surface.hpp"
+#include "liquid/sph/feature_size.hpp"
+#include "liquid/sph/forces.hpp"
+#include "liquid/sph/kernels.hpp"
+#include "liquid/sph/resample.hpp"
+
+namespace liquid::sph {
+namespace {
+
+/// The integral of a radial function over its support r, by the midpoint rule in q.
+template <int Dim, class F>
+double radial_integral(F f, double r, int n = 200000) {
+  double sum = 0.0;
+  const double dq = r / n;
+  for (int k = 0; k < n; ++k) {
+    const double q = (k + 0.5) * dq;
+    sum += f(q) * (Dim == 2 ? 2.0 * std::numbers::pi * q : 4.0 * std::numbers::pi * q * q) * dq;
+  }
+  return sum;
+}
+
+template <int Dim>
+void kernels_are_normalised() {
+  using K = Kernels<Dim>;
+  for (double r : {0.05, 1.0, 3.0}) {
+    EXPECT_NEAR(radial_integral<Dim>([&](double q) { return K::poly6(q, r); }, r), 1.0, 1e-8)
+        << Dim << "D r=" << r;
+    EXPECT_NEAR(radial_integral<Dim>([&](double q) { return K::spiky(q, r); }, r), 1.0, 1e-8)
+        << Dim << "D r=" << r;
+    EXPECT_NEAR(radial_integral<Dim>([&](double q) { return K::viscosity(q, r); }, r), 1.0, 1e-4)
+        << Dim << "D r=" << r;
+  }
+}
+TEST(SphKernels, IntegrateToOne2D) {
+  kernels_are_normalised<2>();
+}
+TEST(SphKernels, IntegrateToOne3D) {
+  kernels_are_normalised<3>();
+}
+
+template <int Dim>
+void derivatives_match_differences() {
+  using K = Kernels<Dim>;
+  const double r = 0.7, e = 1e-5;
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> u(-0.5, 0.5);
+  for (int t = 0; t < 20; ++t) {
+    Vec<Dim> x;
+    for (int d = 0; d < Dim; ++d) x[d] = u(rng);
+    if (x.norm() < 0.05 || x.norm() > 0.65) continue;
+    const Vec<Dim> g = K::spiky_gradient(x, r);
+    for (int d = 0; d < Dim; ++d) {
+      Vec<Dim> a = x, b = x;
+      a[d] -= e, b[d] += e;
+      EXPECT_NEAR(g[d], (K::spiky(b.norm(), r) - K::spiky(a.norm(), r)) / (2 * e),
+                  1e-5 * (1.0 + std::abs(g[d])));
+    }
+    // The Laplacian by second differences along every axis.
+    double lap = 0.0;
+    for (int d = 0; d < Dim; ++d) {
+      Vec<Dim> a = x, b = x;
+      a[d] -= e, b[d] += e;
+      lap +=
+          (K::viscosity(b.norm(), r) - 2 * K::viscosity(x.norm(), r) + K::viscosity(a.norm(), r)) / (e * e);
+    }
+    const double exact = K::viscosity_laplacian(x.norm(), r);
+    EXPECT_NEAR(lap, exact, 1e-3 * std::abs(exact)) << Dim << "D at q = " << x.norm();
+  }
+}
+TEST(SphKernels, GradientAndLaplacianMatchDifferences2D) {
+  derivatives_match_differences<2>();
+}
+TEST(SphKernels, GradientAndLaplacianMatchDifferences3D) {
+  derivatives_match_differences<3>();
+}
+
+/// Random particles of levels 0..2 in the unit box, with random velocities.
+template <int Dim>
+SphParticles<Dim> random_particles(const Sizes& sizes, int n, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::uniform_int_distribution<int> lv(0, 2);
+  SphParticles<Dim> p;
+  for (int i = 0; i < n; ++i) {
+    Vec<Dim> x, v;
+    for (int d = 0; d < Dim; ++d) x[d] = u(rng), v[d] = u(rng) - 0.5;
+    p.add(sizes, x, v, lv(rng), 0.1);
+  }
+  return p;
+}
+
+template <int Dim>
+void neighbours_match_brute_force() {
+  Sizes sizes;
+  sizes.radius = 0.12;
+  const SphParticles<Dim> p = random_particles<Dim>(sizes, 600, 5);
+  const PointTree<Dim> tree(p.x);
+  const NeighbourLists nbrs = find_neighbours<Dim>(tree, p.x, p.radius);
+  for (int i = 0; i < p.size(); ++i) {
+    std::vector<int> expected;
+    for (int j = 0; j < p.size(); ++j)
+      if (j != i && (p.x[i] - p.x[j]).norm() < std::max(p.radius[i], p.radius[j])) expected.push_back(j);
+    const auto row = nbrs.of(i);
+    ASSERT_EQ(std::vector<int>(row.begin(), row.end()), expected) << "particle " << i;
+  }
+}
+TEST(SphNeighbours, MatchBruteForceWithMixedRadii2D) {
+  neighbours_match_brute_force<2>();
+}
+TEST(SphNeighbours, MatchBruteForceWithMixedRadii3D) {
+  neighbours_match_brute_force<3>();
+}
+
+template <int Dim>
+void forces_are_symmetric() {
+  Sizes sizes;
+  sizes.radius = 0.15;
+  sizes.mass = 0.01;
+  SphParticles<Dim> p = random_particles<Dim>(sizes, 500, 7);
+  const PointTree<Dim> tree(p.x);
+  const NeighbourLists nbrs = find_neighbours<Dim>(tree, p.x, p.radius);
+  FluidConstants fluid;
+  fluid.rest_density = 1.0, fluid.stiffness = 10.0, fluid.viscosity = 0.3, fluid.negative_pressure = true;
+  compute_density<Dim>(p, nbrs, fluid);
+  long mixed = 0;
+  for (int i = 0; i < p.size(); ++i)
+    for (int j : nbrs.of(i)) {
+      const Vec<Dim> fij = pair_force<Dim>(p, i, j, fluid), fji = pair_force<Dim>(p, j, i, fluid);
+      ASSERT_TRUE(fij == -fji) << "pair " << i << ", " << j;
+      mixed += p.level[i] != p.level[j] && fij.norm() > 0.0;
+    }
+  EXPECT_GT(mixed, 100) << "too few pairs of different sizes to test Newton's third law between them";
+  compute_accelerations<Dim>(p, nbrs, fluid, Vec<Dim>::Zero());
+  Vec<Dim> total = Vec<Dim>::Zero();
+  double scale = 0.0;
+  for (int i = 0; i < p.size(); ++i) total += p.mass[i] * p.a[i], scale += p.mass[i] * p.a[i].norm();
+  EXPECT_GT(scale, 0.0);
+  EXPECT_LT(total.norm(), 1e-13 * scale);
+}
+TEST(SphForces, ObeyNewtonsThirdLawAcrossLevels2D) {
+  forces_are_symmetric<2>();
+}
+TEST(SphForces, ObeyNewtonsThirdLawAcrossLevels3D) {
+  forces_are_symmetric<3>();
+}
+
+/// A level-0 lattice of spacing s filling phi < 0 inside `box`, distances -phi.
+template <int Dim>
+SphParticles<Dim> lattice(const Sizes& sizes, double s, const Box<Dim>& box,
+                          const levelset::Function<Dim>& phi) {
+  SphParticles<Dim> p;
+  Eigen::Matrix<long, Dim, 1> n, k = Eigen::Matrix<long, Dim, 1>::Zero();
+  for (int d = 0; d < Dim; ++d) n[d] = std::lround(box.size()[d] / s);
+  while (true) {
+    const Vec<Dim> x = box.lo + s * (k.template cast<double>() + Vec<Dim>::Constant(0.5));
+    if (phi(x) < 0.0) p.add(sizes, x, Vec<Dim>::Zero(), 0, -phi(x));
+    int d = 0;
+    while (d < Dim && ++k[d] >= n[d]) k[d] = 0, ++d;
+    if (d == Dim) break;
+  }
+  return p;
+}
+
+/// Redistancing particles that carry the exact distances returns them: the largest error over
+/// particles within `depth` of the surface, in spacings.
+template <int Dim>
+double redistance_error(const levelset::Function<Dim>& phi, const Box<Dim>& box, double s, double depth,
+                        const levelset::Function<Dim>& keep) {
+  Sizes sizes;
+  sizes.radius = 2.5 * s;
+  SphParticles<Dim> p = lattice<Dim>(sizes, s, box, phi);
+  const PointTree<Dim> tree(p.x);
+  const NeighbourLists nbrs = find_neighbours<Dim>(tree, p.x, p.radius);
+  const RedistanceStats stats = redistance<Dim>(p, nbrs, tree, 1);
+  EXPECT_GT(stats.projected, 0);
+  EXPECT_EQ(stats.unreached, 0);
+  double worst = 0.0;
+  for (int i = 0; i < p.size(); ++i)
+    if (-phi(p.x[i]) < depth && keep(p.x[i]) < 0.0)
+      worst = std::max(worst, std::abs(p.distance[i] + phi(p.x[i])));
+  return worst / s;
+}
+
+TEST(SphRedistance, ReturnsTheDistanceToAPlane) {
+  // A slab below y = 0.5 (the other faces far away: the test looks at the middle of the top face).
+  const double s = 0.02;
+  const Box<2> box{Vec<2>(0, 0), Vec<2>(1, 0.5)};
+  const auto phi = levelset::box<2>(box);
+  const auto middle = levelset::box<2>(Box<2>{Vec<2>(0.3, 0.2), Vec<2>(0.7, 0.6)});
+  EXPECT_LT(redistance_error<2>(phi, box, s, 3 * 2.5 * s, middle), 0.05);
+  const Box<3> box3{Vec<3>(0, 0, 0), Vec<3>(0.6, 0.3, 0.6)};
+  const auto middle3 = levelset::box<3>(Box<3>{Vec<3>(0.2, 0.1, 0.2), Vec<3>(0.4, 0.4, 0.4)});
+  EXPECT_LT(redistance_error<3>(levelset::box<3>(box3), box3, 0.03, 3 * 2.5 * 0.03, middle3), 0.05);
+}
+
+TEST(SphRedistance, ReturnsTheDistanceToASphere) {
+  const double s = 0.02;
+  const auto phi = levelset::sphere<2>(Vec<2>(0.5, 0.5), 0.4);
+  const auto all = [](const Vec<2>&) { return -1.0; };
+  EXPECT_LT(redistance_error<2>(phi, Box<2>{Vec<2>(0, 0), Vec<2>(1, 1)}, s, 3 * 2.5 * s, all), 0.15);
+  const auto ball = levelset::sphere<3>(Vec<3>(0.5, 0.5, 0.5), 0.4);
+  const auto all3 = [](const Vec<3>&) { return -1.0; };
+  EXPECT_LT(redistance_error<3>(ball, Box<3>{Vec<3>(0, 0, 0), Vec<3>(1, 1, 1)}, 0.04, 3 * 2.5 * 0.04, all3),
+            0.15);
+}
+
+TEST(SphFeatureSize, OfASlabIsDepthPlusHalfItsThickness) {
+  // A slab of thickness T = 0.4 and length 2: medial axis at y = 0.2, lfs = T/2 on its faces, so
+  // elfs = depth + T/2 away from its ends (and T/2 on the faces).
+  const double s = 0.02, T = 0.4;
+  Sizes sizes;
+  sizes.radius = 2.5 * s;
+  const Box<2> slab{Vec<2>(0, 0), Vec<2>(2, T)};
+  SphParticles<2> p = lattice<2>(sizes, s, slab, levelset::box<2>(slab));
+  const PointTree<2> tree(p.x);
+  const NeighbourLists nbrs = find_neighbours<2>(tree, p.x, p.radius);
+  redistance<2>(p, nbrs, tree, 1);
+  std::vector<char> medial;
+  const FeatureStats stats = feature_size<2>(p, nbrs, 60.0, &medial);
+  EXPECT_GT(stats.medial, 0);
+  double worst = 0.0, worst_axis = 0.0;
+  for (int i = 0; i < p.size(); ++i) {
+    if (p.x[i][0] < 0.7 || p.x[i][0] > 1.3) continue;
+    const double depth = std::min(p.x[i][1], T - p.x[i][1]);
+    worst = std::max(worst, std::abs(p.elfs[i] - (depth + T / 2)));
+    EXPECT_LE(p.elfs[i], depth + T / 2 + 1e-12) << "elfs above the exact value at y = " << p.x[i][1];
+    if (medial[i]) worst_axis = std::max(worst_axis, std::abs(p.x[i][1] - T / 2));
+  }
+  // The medial axis made of particles is a band: the rows with a partner across the middle within
+  // r (here 0.17..0.23, 3 spacings wide). lfs is measured to its nearest row, so elfs comes out low by
+  // up to half the band, (r + s) / 2: a conservative error (finer sampling, never coarser).
+  const double bound = 0.5 * (sizes.radius + s);
+  EXPECT_LE(worst, bound + 1e-12);
+  EXPECT_LE(worst_axis, bound + 1e-12);
+}
+
+template <int Dim>
+void split_and_merge_conserve() {
+  Sizes sizes;
+  sizes.radius = 0.1, sizes.mass = 0.37;
+  SphParticles<Dim> p = random_particles<Dim>(sizes, 400, 11);
+  for (int i = 0; i < p.size(); ++i)
+    p.level[i] = 2, p.mass[i] = sizes.mass_of(2), p.radius[i] = sizes.radius_of<Dim>(2);
+  std::mt19937_64 rng(13);
+  const double m0 = p.total_mass();
+  const Vec<Dim> q0 = p.momentum();
+  std::vector<char> marked(p.size(), 0);
+  for (int i = 0; i < p.size(); i += 2) marked[i] = 1;
+  {
+    const PointTree<Dim> tree(p.x);
+    const NeighbourLists nbrs = find_neighbours<Dim>(tree, p.x, p.radius);
+    const ResampleStats s = split_marked<Dim>(p, nbrs, sizes, marked, nullptr, rng);
+    EXPECT_EQ(s.split + s.split_skipped, 200);
+    EXPECT_GT(s.split, 150);
+    EXPECT_EQ(p.size(), 400 + s.split);
+    EXPECT_GE(s.closest_child_ratio, s.lowered > 0 ? 0.0 : 1.0 - 1e-12);
+  }
+  EXPECT_NEAR(p.total_mass(), m0, 1e-14 * m0);
+  EXPECT_LT((p.momentum() - q0).norm(), 1e-13 * m0);
+  {
+    const PointTree<Dim> tree(p.x);
+    const NeighbourLists nbrs = find_neighbours<Dim>(tree, p.x, p.radius);
+    const std::vector<char> all(p.size(), 1);
+    const int before = p.size();
+    const ResampleStats s = merge_marked<Dim>(p, nbrs, sizes, all, 4, nullptr);
+    EXPECT_GT(s.merged, 20);
+    EXPECT_EQ(p.size(), before - s.merged);
+  }
+  EXPECT_NEAR(p.total_mass(), m0, 1e-14 * m0);
+  EXPECT_LT((p.momentum() - q0).norm(), 1e-13 * m0);
+  for (int i = 0; i < p.size(); ++i) EXPECT_EQ(p.mass[i], sizes.mass_of(p.level[i]));
+}
+TEST(SphResample, SplitAndMergeConserveMassAndMomentum2D) {
+  split_and_merge_conserve<2>();
+}
+TEST(SphResample, SplitAndMergeConserveMassAndMomentum3D) {
+  split_and_merge_conserve<3>();
+}
+
+TEST(AdaptiveSph, SeedsCoarseParticlesDeepInsideAndKeepsTheVolume) {
+  SphOptions<2> o;
+  o.container = Box<2>{Vec<2>(0, 0), Vec<2>(1, 1)};
+  o.spacing = 0.01;
+  o.max_level = 3;
+  AdaptiveSph<2> sim(o);
+  sim.seed(levelset::box<2>(Box<2>{Vec<2>(0, 0), Vec<2>(1, 0.5)}));
+  std::vector<int> per_level(4, 0);
+  for (int i = 0; i < sim.particles().size(); ++i) ++per_level[sim.particles().level[i]];
+  EXPECT_GT(per_level[0], 0);
+  EXPECT_GT(per_level[2] + per_level[3], 0) << "nothing merged twice in a thick tank";
+  EXPECT_LT(sim.particles().size(), 5000 / 2)
+      << "the adaptive tank holds more than half the lattice's particles";
+  // Split and merge keep the mass of the 100 x 50 lattice.
+  EXPECT_NEAR(sim.particles().total_mass(), 5000 * sim.sizes().mass, 1e-12 * 5000 * sim.sizes().mass);
+}
+
+TEST(AdaptiveSph, RefusesImpossibleOptions) {
+  SphOptions<2> o;
+  o.spacing = -1.0;
+  EXPECT_THROW(AdaptiveSph<2>{o}, Error);
+  o.spacing = 0.01, o.resampling.beta = 1.0;
+  EXPECT_THROW(AdaptiveSph<2>{o}, Error);
+}
+
+}  // namespace
+}  // namespace liquid::sph
