@@ -27,6 +27,10 @@ void SphOptions<Dim>::check() const {
                 "sph: gamma must be within (0, 180) degrees, not {}", gamma_degrees);
   LIQUID_VERIFY(projection_bisections >= 0 && projection_bisections <= 30,
                 "sph: projection_bisections must be within 0..30, not {}", projection_bisections);
+  LIQUID_VERIFY(disk_radius > 0.0 && disk_radius <= 1.0,
+                "sph: the footpoint disks' radius must be within (0, 1] support radii, not {}", disk_radius);
+  LIQUID_VERIFY(fluid.density_diffusion >= 0.0 && fluid.density_diffusion <= 1.0,
+                "sph: the density diffusion delta must be within [0, 1], not {}", fluid.density_diffusion);
   LIQUID_VERIFY(restitution >= 0.0 && restitution <= 1.0, "sph: restitution must be within [0, 1], not {}",
                 restitution);
   LIQUID_VERIFY(gravity.allFinite(), "sph: gravity must be finite");
@@ -36,6 +40,7 @@ template <int Dim>
 AdaptiveSph<Dim>::AdaptiveSph(SphOptions<Dim> options) : options_(std::move(options)), rng_(options_.seed) {
   options_.check();
   options_.resampling.max_level = options_.max_level;
+  walls_ = Boundary<Dim>(options_.container, options_.obstacles);
   sizes_.radius = options_.h_ratio * options_.spacing;
   sizes_.h_ratio = options_.h_ratio;
   // The level-0 mass that gives a full lattice of spacing s the density rho_0.
@@ -44,7 +49,7 @@ AdaptiveSph<Dim>::AdaptiveSph(SphOptions<Dim> options) : options_(std::move(opti
   double sum = 0.0;
   Eigen::Matrix<int, Dim, 1> k = Eigen::Matrix<int, Dim, 1>::Constant(-reach);
   while (true) {
-    sum += Kernels<Dim>::poly6(s * k.template cast<double>().norm(), r);
+    sum += density_kernel<Dim>(options_.fluid, s * k.template cast<double>().norm(), r);
     int d = 0;
     while (d < Dim && ++k[d] > reach) k[d] = -reach, ++d;
     if (d == Dim) break;
@@ -76,7 +81,7 @@ void AdaptiveSph<Dim>::seed(const levelset::Function<Dim>& liquid, const Vec<Dim
     const Vec<Dim> x = offset + s * k.template cast<double>();
     const double phi = liquid(x);
     LIQUID_VERIFY(std::isfinite(phi), "sph: the liquid's level set is not finite at a lattice point");
-    if (phi < 0.0 && !in_solid(x)) p_.add(sizes_, x, velocity, 0, -phi);
+    if (phi < 0.0 && !in_solid(x)) p_.add(sizes_, x, velocity, 0, -phi, options_.fluid.rest_density);
     int d = 0;
     while (d < Dim && ++k[d] >= n[d]) k[d] = 0, ++d;
     if (d == Dim) break;
@@ -91,9 +96,10 @@ void AdaptiveSph<Dim>::seed(const levelset::Function<Dim>& liquid, const Vec<Dim
 }
 
 template <int Dim>
-void AdaptiveSph<Dim>::find_neighbours_now() {
-  tree_.build(p_.x);
-  nbrs_ = find_neighbours<Dim>(tree_, p_.x, p_.radius);
+void AdaptiveSph<Dim>::find_neighbours_now(bool with_tree) {
+  if (options_.search == NeighbourSearch::kd_tree || with_tree) tree_.build(p_.x);
+  nbrs_ = options_.search == NeighbourSearch::kd_tree ? find_neighbours<Dim>(tree_, p_.x, p_.radius)
+                                                      : find_neighbours_cells<Dim>(p_.x, p_.radius);
 }
 
 template <int Dim>
@@ -101,11 +107,12 @@ SphStepReport AdaptiveSph<Dim>::adapt_now() {
   SphStepReport report;
   {
     auto t = timer_.scope("neighbours");
-    find_neighbours_now();
+    find_neighbours_now(true);
   }
   {
     auto t = timer_.scope("redistance");
-    report.redistancing = redistance<Dim>(p_, nbrs_, tree_, options_.projection_bisections);
+    report.redistancing =
+        redistance<Dim>(p_, nbrs_, tree_, options_.projection_bisections, options_.disk_radius);
   }
   report.resampled = true;
   if (options_.adaptive) {
@@ -163,16 +170,22 @@ template <int Dim>
 SphStepReport AdaptiveSph<Dim>::advance(double dt) {
   LIQUID_VERIFY(dt > 0.0 && std::isfinite(dt), "sph: the time step must be positive and finite, not {}", dt);
   auto total = timer_.scope("total");
+  const bool resampling = steps_ % options_.resample_every == 0;
   {
     auto t = timer_.scope("neighbours");
-    find_neighbours_now();
+    find_neighbours_now(resampling);
   }
   SphStepReport report;
   report.pairs = nbrs_.n_pairs();
   {
     auto t = timer_.scope("forces");
-    compute_density<Dim>(p_, nbrs_, options_.fluid);
-    compute_accelerations<Dim>(p_, nbrs_, options_.fluid, options_.gravity);
+    if (options_.fluid.density_update == DensityUpdate::summation) {
+      compute_density<Dim>(p_, nbrs_, options_.fluid, &walls_);
+    } else {
+      compute_pressure<Dim>(p_, options_.fluid);
+      compute_density_rate<Dim>(p_, nbrs_, options_.fluid, options_.gravity, &walls_);
+    }
+    compute_accelerations<Dim>(p_, nbrs_, options_.fluid, options_.gravity, &walls_);
     for (int i = 0; i < p_.size(); ++i) {
       LIQUID_VERIFY(std::isfinite(p_.density[i]) && p_.a[i].allFinite(),
                     "sph: particle {} (level {}) at step {}, t = {}: density {}, acceleration not finite", i,
@@ -181,10 +194,11 @@ SphStepReport AdaptiveSph<Dim>::advance(double dt) {
           std::max(report.max_density_error, std::abs(p_.density[i] / options_.fluid.rest_density - 1.0));
     }
   }
-  if (steps_ % options_.resample_every == 0) {
+  if (resampling) {
     {
       auto t = timer_.scope("redistance");
-      report.redistancing = redistance<Dim>(p_, nbrs_, tree_, options_.projection_bisections);
+      report.redistancing =
+          redistance<Dim>(p_, nbrs_, tree_, options_.projection_bisections, options_.disk_radius);
     }
     report.resampled = true;
     if (options_.adaptive) {
@@ -205,6 +219,8 @@ SphStepReport AdaptiveSph<Dim>::advance(double dt) {
       p_.v[i] += dt * p_.a[i];
       p_.x[i] += dt * p_.v[i];
     }
+    if (options_.fluid.density_update == DensityUpdate::continuity)
+      for (int i = 0; i < n; ++i) p_.density[i] += dt * p_.drho[i];
   }
   {
     auto t = timer_.scope("collisions");
@@ -220,6 +236,25 @@ SphStepReport AdaptiveSph<Dim>::advance(double dt) {
     report.max_speed = std::max(report.max_speed, p_.v[i].norm());
   }
   return report;
+}
+
+template <int Dim>
+void AdaptiveSph<Dim>::relax(double duration) {
+  LIQUID_VERIFY(duration >= 0.0 && std::isfinite(duration), "sph: the relaxation time must be >= 0, not {}",
+                duration);
+  const double tau = duration / 8.0;
+  double t = 0.0;
+  while (t < duration) {
+    const double dt = std::min(stable_dt(), duration - t);
+    if (dt <= 0.0) break;
+    advance(dt);
+    const double damp = std::exp(-dt / tau);
+    for (auto& v : p_.v) v *= damp;
+    t += dt;
+  }
+  for (auto& v : p_.v) v.setZero();
+  time_ = 0.0, steps_ = 0;
+  timer_.clear();
 }
 
 template <int Dim>

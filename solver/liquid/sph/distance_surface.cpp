@@ -87,7 +87,7 @@ std::pair<double, Vec<Dim>> SurfaceField<Dim>::value_gradient(const Vec<Dim>& y)
 
 template <int Dim>
 RedistanceStats redistance(SphParticles<Dim>& p, const NeighbourLists& nbrs, const PointTree<Dim>& tree,
-                           int bisections) {
+                           int bisections, double disk) {
   const int n = p.size();
   LIQUID_VERIFY(nbrs.n_particles() == n && tree.size() == n,
                 "redistance: {} particles, neighbour lists for {}, a tree of {}", n, nbrs.n_particles(),
@@ -152,7 +152,7 @@ RedistanceStats redistance(SphParticles<Dim>& p, const NeighbourLists& nbrs, con
     if (d > dist[i]) continue;
     const int s = source[i];
     for (int j : nbrs.of(i)) {
-      const Vec<Dim> y = closest_on_disk<Dim>(p.x[j], centre[s], normal[s], p.radius[s]);
+      const Vec<Dim> y = closest_on_disk<Dim>(p.x[j], centre[s], normal[s], disk * p.radius[s]);
       const double dj = (p.x[j] - y).norm();
       if (dj < dist[j]) {
         dist[j] = dj, source[j] = s;
@@ -167,16 +167,18 @@ RedistanceStats redistance(SphParticles<Dim>& p, const NeighbourLists& nbrs, con
     }
     if (!on_surface[i]) ++stats.propagated;
     p.distance[i] = dist[i];
-    p.foot[i] = source[i] == i
-                    ? centre[i]
-                    : closest_on_disk<Dim>(p.x[i], centre[source[i]], normal[source[i]], p.radius[source[i]]);
+    p.foot[i] = source[i] == i ? centre[i]
+                               : closest_on_disk<Dim>(p.x[i], centre[source[i]], normal[source[i]],
+                                                      disk * p.radius[source[i]]);
   }
   return stats;
 }
 
 template class SurfaceField<2>;
 template class SurfaceField<3>;
-template RedistanceStats redistance<2>(SphParticles<2>&, const NeighbourLists&, const PointTree<2>&, int);
-template RedistanceStats redistance<3>(SphParticles<3>&, const NeighbourLists&, const PointTree<3>&, int);
+template RedistanceStats redistance<2>(SphParticles<2>&, const NeighbourLists&, const PointTree<2>&, int,
+                                       double);
+template RedistanceStats redistance<3>(SphParticles<3>&, const NeighbourLists&, const PointTree<3>&, int,
+                                       double);
 
 }  // namespace liquid::sph

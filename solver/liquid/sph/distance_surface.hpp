@@ -13,7 +13,8 @@
 // Redistancing (Sec. 5.2): particles with d_i < r_i are projected onto phi = 0 along the gradient
 // (values at s = 0, r_i/2, r_i, `bisections` halvings of the interval that changes sign, then linear
 // interpolation; the paper uses one); each projected particle carries a footpoint disk (centre y_i,
-// normal the surface's at y_i, radius r_i); a Dijkstra-ordered fast march over the neighbour graph then
+// normal the surface's at y_i, radius `disk` r_i: the paper's is r_i, AdaptiveSph's default half of it,
+// see SphOptions::disk_radius); a Dijkstra-ordered fast march over the neighbour graph then
 // gives every particle the distance to the nearest disk it is reached from, and that disk's closest
 // point as its footpoint.
 
@@ -61,7 +62,7 @@ struct RedistanceStats {
 /// the positions p.x and `nbrs` their neighbour lists.
 template <int Dim>
 RedistanceStats redistance(SphParticles<Dim>& p, const NeighbourLists& nbrs, const PointTree<Dim>& tree,
-                           int bisections = 1);
+                           int bisections = 1, double disk = 0.5);
 
 /// The point of the disk (centre c, unit normal n, radius R) nearest x.
 template <int Dim>

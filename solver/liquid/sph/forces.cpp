@@ -7,19 +7,97 @@
 
 namespace liquid::sph {
 
+const char* to_string(KernelSet kernels) {
+  switch (kernels) {
+    case KernelSet::wendland:
+      return "wendland";
+    case KernelSet::spiky:
+      return "spiky";
+    case KernelSet::mueller:
+      return "mueller";
+  }
+  return "?";
+}
+const char* to_string(DensityUpdate update) {
+  return update == DensityUpdate::continuity ? "continuity" : "summation";
+}
+const char* to_string(PressureForm form) {
+  return form == PressureForm::paper ? "paper" : "variational";
+}
+
 template <int Dim>
-void compute_density(SphParticles<Dim>& p, const NeighbourLists& nbrs, const FluidConstants& fluid) {
-  using K = Kernels<Dim>;
+double density_kernel(const FluidConstants& fluid, double q, double r) {
+  switch (fluid.kernels) {
+    case KernelSet::wendland:
+      return Kernels<Dim>::wendland(q, r);
+    case KernelSet::spiky:
+      return Kernels<Dim>::spiky(q, r);
+    case KernelSet::mueller:
+      return Kernels<Dim>::poly6(q, r);
+  }
+  return 0.0;
+}
+
+template <int Dim>
+Vec<Dim> pressure_kernel_gradient(const FluidConstants& fluid, const Vec<Dim>& x, double r) {
+  return fluid.kernels == KernelSet::wendland ? Kernels<Dim>::wendland_gradient(x, r)
+                                              : Kernels<Dim>::spiky_gradient(x, r);
+}
+
+template <int Dim>
+void compute_density(SphParticles<Dim>& p, const NeighbourLists& nbrs, const FluidConstants& fluid,
+                     const Boundary<Dim>* walls) {
   const int n = p.size();
   LIQUID_VERIFY(nbrs.n_particles() == n, "compute_density: neighbour lists for {} particles, {} particles",
                 nbrs.n_particles(), n);
 #pragma omp parallel for schedule(static)
   for (int i = 0; i < n; ++i) {
-    double rho = p.mass[i] * K::poly6(0.0, p.radius[i]);
-    for (int j : nbrs.of(i)) rho += p.mass[j] * K::poly6((p.x[i] - p.x[j]).norm(), p.radius[i]);
+    double rho = p.mass[i] * density_kernel<Dim>(fluid, 0.0, p.radius[i]);
+    for (int j : nbrs.of(i))
+      rho += p.mass[j] * density_kernel<Dim>(fluid, (p.x[i] - p.x[j]).norm(), p.radius[i]);
+    if (walls) rho += fluid.rest_density * walls->share(p.x[i], p.radius[i], fluid.kernels);
     p.density[i] = rho;
-    const double pressure = fluid.stiffness * (rho / fluid.rest_density - 1.0);
+  }
+  compute_pressure<Dim>(p, fluid);
+}
+
+template <int Dim>
+void compute_pressure(SphParticles<Dim>& p, const FluidConstants& fluid) {
+  const int n = p.size();
+#pragma omp parallel for schedule(static)
+  for (int i = 0; i < n; ++i) {
+    const double pressure = fluid.stiffness * (p.density[i] / fluid.rest_density - 1.0);
     p.pressure[i] = fluid.negative_pressure ? pressure : std::max(0.0, pressure);
+  }
+}
+
+template <int Dim>
+void compute_density_rate(SphParticles<Dim>& p, const NeighbourLists& nbrs, const FluidConstants& fluid,
+                          const Vec<Dim>& gravity, const Boundary<Dim>* walls) {
+  const int n = p.size();
+  const double c = std::sqrt(fluid.stiffness / fluid.rest_density);
+  const double hydrostatic = fluid.rest_density * fluid.rest_density / fluid.stiffness;
+#pragma omp parallel for schedule(static)
+  for (int i = 0; i < n; ++i) {
+    double rate = 0.0;
+    for (int j : nbrs.of(i)) {
+      const Vec<Dim> xij = p.x[i] - p.x[j];
+      const Vec<Dim> grad = 0.5 * (pressure_kernel_gradient<Dim>(fluid, xij, p.radius[i]) +
+                                   pressure_kernel_gradient<Dim>(fluid, xij, p.radius[j]));
+      rate += p.mass[j] * (p.v[i] - p.v[j]).dot(grad);
+      if (fluid.density_diffusion > 0.0) {
+        // delta h c sum_j V_j 2 (rho_j - rho_i - hydrostatic part) (x_ji . grad_i W) / |x_ij|^2, with h
+        // half the mean support; the hydrostatic part rho_0^2 g . (x_j - x_i) / k is the density
+        // difference of a liquid at rest, which the diffusion must not flatten (Fourtakas et al. 2019).
+        const double h = 0.25 * (p.radius[i] + p.radius[j]);
+        const double jump = p.density[j] - p.density[i] + hydrostatic * gravity.dot(xij);
+        rate += fluid.density_diffusion * h * c * (p.mass[j] / p.density[j]) * 2.0 * jump * (-xij.dot(grad)) /
+                xij.squaredNorm();
+      }
+    }
+    if (walls)
+      rate += fluid.rest_density * walls->share_gradient(p.x[i], p.radius[i], fluid.kernels).dot(p.v[i]);
+    p.drho[i] = rate;
   }
 }
 
@@ -29,31 +107,50 @@ Vec<Dim> pair_force(const SphParticles<Dim>& p, int i, int j, const FluidConstan
   const Vec<Dim> xij = p.x[i] - p.x[j];
   const double q = xij.norm();
   const double vv = (p.mass[i] / p.density[i]) * (p.mass[j] / p.density[j]);
-  const Vec<Dim> grad = 0.5 * (K::spiky_gradient(xij, p.radius[i]) + K::spiky_gradient(xij, p.radius[j]));
+  const Vec<Dim> grad = 0.5 * (pressure_kernel_gradient<Dim>(fluid, xij, p.radius[i]) +
+                               pressure_kernel_gradient<Dim>(fluid, xij, p.radius[j]));
   const double lap = 0.5 * (K::viscosity_laplacian(q, p.radius[i]) + K::viscosity_laplacian(q, p.radius[j]));
-  return (-vv * 0.5 * (p.pressure[i] + p.pressure[j])) * grad +
-         (fluid.viscosity * vv * lap) * (p.v[j] - p.v[i]);
+  const double pressure = fluid.pressure_form == PressureForm::paper
+                              ? vv * (p.pressure[i] + p.pressure[j])
+                              : (p.mass[i] * p.mass[j]) * (p.pressure[i] / (p.density[i] * p.density[i]) +
+                                                           p.pressure[j] / (p.density[j] * p.density[j]));
+  return -pressure * grad + (fluid.viscosity * vv * lap) * (p.v[j] - p.v[i]);
 }
 
 template <int Dim>
 void compute_accelerations(SphParticles<Dim>& p, const NeighbourLists& nbrs, const FluidConstants& fluid,
-                           const Vec<Dim>& gravity) {
+                           const Vec<Dim>& gravity, const Boundary<Dim>* walls) {
   const int n = p.size();
 #pragma omp parallel for schedule(static)
   for (int i = 0; i < n; ++i) {
     Vec<Dim> f = Vec<Dim>::Zero();
     for (int j : nbrs.of(i)) f += pair_force(p, i, j, fluid);
     p.a[i] = f / p.mass[i] + gravity;
+    if (walls && p.pressure[i] != 0.0)
+      p.a[i] -= (p.pressure[i] * fluid.rest_density / (p.density[i] * p.density[i])) *
+                walls->share_gradient(p.x[i], p.radius[i], fluid.kernels);
   }
 }
 
-template void compute_density<2>(SphParticles<2>&, const NeighbourLists&, const FluidConstants&);
-template void compute_density<3>(SphParticles<3>&, const NeighbourLists&, const FluidConstants&);
+template Vec<2> pressure_kernel_gradient<2>(const FluidConstants&, const Vec<2>&, double);
+template Vec<3> pressure_kernel_gradient<3>(const FluidConstants&, const Vec<3>&, double);
+template double density_kernel<2>(const FluidConstants&, double, double);
+template double density_kernel<3>(const FluidConstants&, double, double);
+template void compute_density<2>(SphParticles<2>&, const NeighbourLists&, const FluidConstants&,
+                                 const Boundary<2>*);
+template void compute_density<3>(SphParticles<3>&, const NeighbourLists&, const FluidConstants&,
+                                 const Boundary<3>*);
 template Vec<2> pair_force<2>(const SphParticles<2>&, int, int, const FluidConstants&);
 template Vec<3> pair_force<3>(const SphParticles<3>&, int, int, const FluidConstants&);
+template void compute_pressure<2>(SphParticles<2>&, const FluidConstants&);
+template void compute_pressure<3>(SphParticles<3>&, const FluidConstants&);
+template void compute_density_rate<2>(SphParticles<2>&, const NeighbourLists&, const FluidConstants&,
+                                      const Vec<2>&, const Boundary<2>*);
+template void compute_density_rate<3>(SphParticles<3>&, const NeighbourLists&, const FluidConstants&,
+                                      const Vec<3>&, const Boundary<3>*);
 template void compute_accelerations<2>(SphParticles<2>&, const NeighbourLists&, const FluidConstants&,
-                                       const Vec<2>&);
+                                       const Vec<2>&, const Boundary<2>*);
 template void compute_accelerations<3>(SphParticles<3>&, const NeighbourLists&, const FluidConstants&,
-                                       const Vec<3>&);
+                                       const Vec<3>&, const Boundary<3>*);
 
 }  // namespace liquid::sph

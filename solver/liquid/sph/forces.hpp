@@ -2,44 +2,78 @@
 // Symmetric SPH forces between particles of different sizes (Adams et al. 2007, Eqs. 1-2, after the
 // shooting/gathering average of Desbrun and Cani 1999) with the kernels of Müller et al. 2003:
 //
-//   rho_i = sum_j m_j W_poly6(|x_i - x_j|, r_i)        (j = i included)
-//   P_i   = k (rho_i / rho_0 - 1)                       (clamped at 0 unless negative pressure is on)
-//   f_ij  = -V_i V_j (P_i + P_j)/2 (grad W_spiky(x_i - x_j, r_i) + grad W_spiky(x_i - x_j, r_j))/2
-//           + mu V_i V_j (v_j - v_i) (lap W_visc(., r_i) + lap W_visc(., r_j))/2,     V_i = m_i / rho_i
+//   rho_i = sum_j m_j W(|x_i - x_j|, r_i)        (j = i included; W the density kernel, see below)
+//   P_i   = k (rho_i / rho_0 - 1)                (clamped at 0 unless negative pressure is on)
+//   f_ij  = -V_i V_j (P_i + P_j) gbar_ij + mu V_i V_j (v_j - v_i) lbar_ij,     V_i = m_i / rho_i
+//   gbar_ij = (grad W_spiky(x_i - x_j, r_i) + grad W_spiky(x_i - x_j, r_j)) / 2, lbar_ij likewise
+//             for the viscosity kernel's Laplacian.
 //
-// The pressure term differs from the paper's Eq. 1 in two stated ways: the gradient is taken with
-// respect to x_i (the paper's x_ij = x_j - x_i written with the opposite sign would attract), and
-// (P_i + P_j) carries Müller's 1/2, so that a single level is exactly Müller's SPH; the paper's form
-// is the same with k doubled. Every pair's force is computed from the same symmetric expression on
-// both sides, so f_ij = -f_ji to the last bit and the forces sum to zero to round-off.
+// The gradient is taken with respect to x_i: the paper writes x_ij = x_j - x_i, with which Eq. 1 as
+// printed would attract. Eq. 1 carries no 1/2 on (P_i + P_j), unlike Müller et al.'s force density;
+// with it the force is half of -grad P (the sum over j of (P_i + P_j)/2 grad W approximates grad P / 2),
+// and a tank settles at twice the compression; Eq. 1 is right.
+//
+// Three choices, measured on the still 2D tank of sph-hydrostatic (s = 1/50, c = 10 sqrt(2 g H),
+// mu = 5, after 0.3 s of damped settling; kinetic energy per metre after 1 s):
+//   - kernels: Müller's poly6 density with the spiky pressure gradient (the paper's) is not the
+//     gradient of any energy, and the tank gains energy without bound (1e-3 -> 97 J); spiky for
+//     both: 0.02 J; Wendland C2 for both: 0.012 J. Default Wendland (smooth at 0, no pairing).
+//   - density: the paper's summation is quiet on one level, but a resampled tank starts with density
+//     errors of +-20% (a merged pair's mass sits closer to its neighbours than the lattice's) and
+//     explodes (10^3 J within 0.03 s, levels 0-3 without any further resampling). Carried by the
+//     continuity equation, with Molteni and Colagrossi's density diffusion (delta = 0.1), a split or
+//     merge keeps its parents' density: the same adaptive tank stays bounded (about 3 J, 0.4 m/s),
+//     the single one at 0.4-1.5 J. Continuity also needs dt <= 0.25 s / c (0.4 s / c grew without
+//     bound). Default continuity; summation one flag away.
+//   - pressure form: `paper` is Eq. 1; `variational` replaces V_i V_j (P_i + P_j) with
+//     m_i m_j (P_i / rho_i^2 + P_j / rho_j^2) (equal to Eq. 1 where rho_i = rho_j); the two measured
+//     alike (0.023 and 0.014 J with spiky summation). Default Eq. 1.
+// Every pair's force comes from the same symmetric expression on both sides, so f_ij = -f_ji to the
+// last bit and the forces sum to zero to round-off, for mixed sizes too.
 
 #include <span>
 
 #include "liquid/core/types.hpp"
+#include "liquid/sph/boundary.hpp"
+#include "liquid/sph/fluid.hpp"
 #include "liquid/sph/neighbours.hpp"
 #include "liquid/sph/sph_particles.hpp"
 
 namespace liquid::sph {
 
-struct FluidConstants {
-  double rest_density = 1000.0;    ///< rho_0 (kg/m^Dim)
-  double stiffness = 2.0e5;        ///< k of the equation of state (Pa)
-  double viscosity = 0.5;          ///< mu
-  bool negative_pressure = false;  ///< keep P < 0 (tension) instead of clamping it at 0
-};
-
-/// Density and pressure of every particle (writes p.density, p.pressure). OpenMP.
+/// The density kernel of `fluid` at distance q with support r.
 template <int Dim>
-void compute_density(SphParticles<Dim>& p, const NeighbourLists& nbrs, const FluidConstants& fluid);
+double density_kernel(const FluidConstants& fluid, double q, double r);
+/// The gradient of the pressure kernel of `fluid` at offset x with support r.
+template <int Dim>
+Vec<Dim> pressure_kernel_gradient(const FluidConstants& fluid, const Vec<Dim>& x, double r);
+
+/// Density and pressure of every particle (writes p.density, p.pressure), with the walls' share when
+/// `walls` is given. OpenMP.
+template <int Dim>
+void compute_density(SphParticles<Dim>& p, const NeighbourLists& nbrs, const FluidConstants& fluid,
+                     const Boundary<Dim>* walls = nullptr);
 
 /// The pair force on i from j (pressure + viscosity); f(j, i) = -f(i, j) exactly.
 template <int Dim>
 Vec<Dim> pair_force(const SphParticles<Dim>& p, int i, int j, const FluidConstants& fluid);
 
-/// Acceleration of every particle from the pair forces plus gravity (writes p.a); the density and
-/// pressure must be current. Each particle sums its own row (no write conflicts). OpenMP.
+/// P from the carried density (continuity update): writes p.pressure. OpenMP.
+template <int Dim>
+void compute_pressure(SphParticles<Dim>& p, const FluidConstants& fluid);
+
+/// The continuity equation's rate of density change, D rho_i / Dt = sum_j m_j (v_i - v_j) . gbar_ij
+/// plus the walls' rho_0 grad share . v_i, plus the density diffusion (delta-SPH) of the difference
+/// from the hydrostatic state under `gravity` (writes p.drho). OpenMP.
+template <int Dim>
+void compute_density_rate(SphParticles<Dim>& p, const NeighbourLists& nbrs, const FluidConstants& fluid,
+                          const Vec<Dim>& gravity, const Boundary<Dim>* walls = nullptr);
+
+/// Acceleration of every particle from the pair forces, the walls' pressure (when `walls` is given)
+/// and gravity (writes p.a); the density and pressure must be current. Each particle sums its own row
+/// (no write conflicts). OpenMP.
 template <int Dim>
 void compute_accelerations(SphParticles<Dim>& p, const NeighbourLists& nbrs, const FluidConstants& fluid,
-                           const Vec<Dim>& gravity);
+                           const Vec<Dim>& gravity, const Boundary<Dim>* walls = nullptr);
 
 }  // namespace liquid::sph

@@ -19,6 +19,14 @@
 
 namespace liquid::sph {
 
+/// x^n by multiplications (the kernels' constants are on the hot path).
+template <int N>
+constexpr double ipow(double x) {
+  double y = 1.0;
+  for (int k = 0; k < N; ++k) y *= x;
+  return y;
+}
+
 template <int Dim>
 struct Kernels {
   static_assert(Dim == 2 || Dim == 3);
@@ -26,14 +34,14 @@ struct Kernels {
 
   static double poly6(double q, double r) {
     if (q >= r) return 0.0;
-    const double c = Dim == 3 ? 315.0 / (64.0 * pi * std::pow(r, 9)) : 4.0 / (pi * std::pow(r, 8));
+    const double c = Dim == 3 ? 315.0 / (64.0 * pi * ipow<9>(r)) : 4.0 / (pi * ipow<8>(r));
     const double s = r * r - q * q;
     return c * s * s * s;
   }
 
   static double spiky(double q, double r) {
     if (q >= r) return 0.0;
-    const double c = Dim == 3 ? 15.0 / (pi * std::pow(r, 6)) : 10.0 / (pi * std::pow(r, 5));
+    const double c = Dim == 3 ? 15.0 / (pi * ipow<6>(r)) : 10.0 / (pi * ipow<5>(r));
     const double s = r - q;
     return c * s * s * s;
   }
@@ -42,7 +50,7 @@ struct Kernels {
   static Vec<Dim> spiky_gradient(const Vec<Dim>& x, double r) {
     const double q = x.norm();
     if (q >= r || q == 0.0) return Vec<Dim>::Zero();
-    const double c = Dim == 3 ? 45.0 / (pi * std::pow(r, 6)) : 30.0 / (pi * std::pow(r, 5));
+    const double c = Dim == 3 ? 45.0 / (pi * ipow<6>(r)) : 30.0 / (pi * ipow<5>(r));
     const double s = r - q;
     return (-c * s * s / q) * x;
   }
@@ -54,15 +62,32 @@ struct Kernels {
       const double c = 15.0 / (2.0 * pi * r * r * r);
       return c * (-q * q * q / (2.0 * r * r * r) + q * q / (r * r) + r / (2.0 * q) - 1.0);
     } else {
-      const double c = 40.0 / (pi * std::pow(r, 5));
+      const double c = 40.0 / (pi * ipow<5>(r));
       return c * ((r / 4.0) * (q * q - r * r) - (q * q * q - r * r * r) / 9.0 +
                   (r * r * r / 6.0) * std::log(r / q));
     }
   }
 
+  /// Wendland's C2 kernel (Wendland 1995; Dehnen and Aly 2012): sigma (1 - q/r)^4 (1 + 4 q/r), with
+  /// sigma = 7 / (pi r^2) in 2D and 21 / (2 pi r^3) in 3D; smooth at 0 and free of the pairing
+  /// instability.
+  static double wendland(double q, double r) {
+    if (q >= r) return 0.0;
+    const double c = Dim == 3 ? 21.0 / (2.0 * pi * r * r * r) : 7.0 / (pi * r * r);
+    const double t = 1.0 - q / r;
+    return c * ipow<4>(t) * (1.0 + 4.0 * q / r);
+  }
+  static Vec<Dim> wendland_gradient(const Vec<Dim>& x, double r) {
+    const double q = x.norm();
+    if (q >= r) return Vec<Dim>::Zero();
+    const double c = Dim == 3 ? 21.0 / (2.0 * pi * r * r * r) : 7.0 / (pi * r * r);
+    const double t = 1.0 - q / r;
+    return (-20.0 * c * ipow<3>(t) / (r * r)) * x;  // dW/dq = -20 c (q / r^2) (1 - q/r)^3
+  }
+
   static double viscosity_laplacian(double q, double r) {
     if (q >= r) return 0.0;
-    const double c = Dim == 3 ? 45.0 / (pi * std::pow(r, 6)) : 40.0 / (pi * std::pow(r, 5));
+    const double c = Dim == 3 ? 45.0 / (pi * ipow<6>(r)) : 40.0 / (pi * ipow<5>(r));
     return c * (r - q);
   }
 };

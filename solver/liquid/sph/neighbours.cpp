@@ -115,6 +115,90 @@ NeighbourLists find_neighbours(const PointTree<Dim>& tree, std::span<const Vec<D
   return lists;
 }
 
+const char* to_string(NeighbourSearch search) {
+  return search == NeighbourSearch::cell_list ? "cell-list" : "kd-tree";
+}
+
+template <int Dim>
+NeighbourLists find_neighbours_cells(std::span<const Vec<Dim>> x, std::span<const double> radius) {
+  const int n = static_cast<int>(x.size());
+  LIQUID_VERIFY(static_cast<int>(radius.size()) == n, "find_neighbours_cells: {} particles, {} radii", n,
+                radius.size());
+  NeighbourLists lists;
+  lists.begin.assign(n + 1, 0);
+  if (n == 0) return lists;
+  Vec<Dim> lo = x[0], hi = x[0];
+  double rmax = 0.0;
+  for (int i = 0; i < n; ++i) {
+    LIQUID_VERIFY(x[i].allFinite(), "find_neighbours_cells: particle {} has a position that is not finite",
+                  i);
+    lo = lo.cwiseMin(x[i]), hi = hi.cwiseMax(x[i]), rmax = std::max(rmax, radius[i]);
+  }
+  LIQUID_VERIFY(rmax > 0.0, "find_neighbours_cells: every radius is zero");
+  Eigen::Matrix<std::int64_t, Dim, 1> dims;
+  for (int d = 0; d < Dim; ++d) dims[d] = static_cast<std::int64_t>((hi[d] - lo[d]) / rmax) + 1;
+  const std::int64_t n_cells = dims.prod();
+  LIQUID_VERIFY(n_cells < (std::int64_t(1) << 31),
+                "find_neighbours_cells: {} cells: the particles spread too far", n_cells);
+  auto coord = [&](const Vec<Dim>& p) {
+    Eigen::Matrix<std::int64_t, Dim, 1> c;
+    for (int d = 0; d < Dim; ++d)
+      c[d] = std::min<std::int64_t>(dims[d] - 1, static_cast<std::int64_t>((p[d] - lo[d]) / rmax));
+    return c;
+  };
+  auto flat = [&](const Eigen::Matrix<std::int64_t, Dim, 1>& c) {
+    std::int64_t f = 0;
+    for (int d = Dim - 1; d >= 0; --d) f = f * dims[d] + c[d];
+    return f;
+  };
+  // Counting sort of the particles by cell.
+  std::vector<std::int32_t> cell_begin(n_cells + 1, 0), order(n);
+  std::vector<std::int64_t> cell_of(n);
+  for (int i = 0; i < n; ++i) ++cell_begin[(cell_of[i] = flat(coord(x[i]))) + 1];
+  for (std::int64_t c = 0; c < n_cells; ++c) cell_begin[c + 1] += cell_begin[c];
+  {
+    std::vector<std::int32_t> next(cell_begin.begin(), cell_begin.end() - 1);
+    for (int i = 0; i < n; ++i) order[next[cell_of[i]]++] = i;
+  }
+  // Visits every j != i with |x_i - x_j| < max(r_i, r_j).
+  auto visit = [&](int i, auto&& f) {
+    const auto c = coord(x[i]);
+    Eigen::Matrix<std::int64_t, Dim, 1> o = Eigen::Matrix<std::int64_t, Dim, 1>::Constant(-1);
+    while (true) {
+      const Eigen::Matrix<std::int64_t, Dim, 1> q = c + o;
+      if ((q.array() >= 0).all() && (q.array() < dims.array()).all()) {
+        const std::int64_t cell = flat(q);
+        for (std::int32_t k = cell_begin[cell]; k < cell_begin[cell + 1]; ++k) {
+          const int j = order[k];
+          if (j == i) continue;
+          const double r = std::max(radius[i], radius[j]);
+          if ((x[i] - x[j]).squaredNorm() < r * r) f(j);
+        }
+      }
+      int d = 0;
+      while (d < Dim && ++o[d] > 1) o[d] = -1, ++d;
+      if (d == Dim) break;
+    }
+  };
+#pragma omp parallel for schedule(dynamic, 256)
+  for (int i = 0; i < n; ++i) {
+    std::int64_t count = 0;
+    visit(i, [&](int) { ++count; });
+    lists.begin[i + 1] = count;
+  }
+  for (int i = 0; i < n; ++i) lists.begin[i + 1] += lists.begin[i];
+  lists.index.resize(lists.begin[n]);
+#pragma omp parallel for schedule(dynamic, 256)
+  for (int i = 0; i < n; ++i) {
+    std::int64_t at = lists.begin[i];
+    visit(i, [&](int j) { lists.index[at++] = j; });
+    std::sort(lists.index.begin() + lists.begin[i], lists.index.begin() + lists.begin[i + 1]);
+  }
+  return lists;
+}
+
+template NeighbourLists find_neighbours_cells<2>(std::span<const Vec<2>>, std::span<const double>);
+template NeighbourLists find_neighbours_cells<3>(std::span<const Vec<3>>, std::span<const double>);
 template class PointTree<2>;
 template class PointTree<3>;
 template NeighbourLists find_neighbours<2>(const PointTree<2>&, std::span<const Vec<2>>,

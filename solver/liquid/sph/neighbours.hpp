@@ -55,4 +55,12 @@ template <int Dim>
 NeighbourLists find_neighbours(const PointTree<Dim>& tree, std::span<const Vec<Dim>> x,
                                std::span<const double> radius);
 
+/// The same lists from a uniform cell list of cells as wide as the largest radius (each particle
+/// scans the 3^Dim cells around its own): no tree to build, two passes (count, fill). OpenMP.
+template <int Dim>
+NeighbourLists find_neighbours_cells(std::span<const Vec<Dim>> x, std::span<const double> radius);
+
+enum class NeighbourSearch { cell_list, kd_tree };
+const char* to_string(NeighbourSearch search);
+
 }  // namespace liquid::sph

@@ -124,13 +124,13 @@ struct Pass {
     const Vec<Dim> u = dirs[valid[pick(rng)]];
     if (d < nominal) ++stats.lowered;
     const Vec<Dim> x0 = p.x[i], v0 = p.v[i], a0 = p.a[i], foot = p.foot[i];
-    const double elfs = p.elfs[i];
+    const double elfs = p.elfs[i], rho = p.density[i];
     removed[i] = 1;
     for (double sgn : {1.0, -1.0}) {
       const Vec<Dim> c = x0 + sgn * d * u;
       stats.closest_child_ratio = std::min(stats.closest_child_ratio, clearance(c, i) / nominal);
       const double dist = plane ? std::max(0.0, (foot - c).dot(out) / out_len) : 0.0;
-      const int k = p.add(sizes, c, v0, level - 1, dist);
+      const int k = p.add(sizes, c, v0, level - 1, dist, rho);
       p.a[k] = a0, p.foot[k] = foot, p.elfs[k] = elfs;
       born_of[i].push_back(k);
     }
@@ -150,8 +150,12 @@ struct Pass {
       const Vec<Dim> v = (mi * p.v[i] + mj * p.v[j]) / (mi + mj), a = (mi * p.a[i] + mj * p.a[j]) / (mi + mj);
       const double dist = 0.5 * (p.distance[i] + p.distance[j]), elfs = std::min(p.elfs[i], p.elfs[j]);
       const Vec<Dim> foot = p.distance[i] <= p.distance[j] ? p.foot[i] : p.foot[j];
+      // The volumes add: rho = (m_i + m_j) / (m_i / rho_i + m_j / rho_j) (0 where a density is unknown).
+      const double rho = p.density[i] > 0.0 && p.density[j] > 0.0
+                             ? (mi + mj) / (mi / p.density[i] + mj / p.density[j])
+                             : 0.0;
       removed[i] = removed[j] = 1;
-      const int k = p.add(sizes, c, v, level + 1, dist);
+      const int k = p.add(sizes, c, v, level + 1, dist, rho);
       p.a[k] = a, p.foot[k] = foot, p.elfs[k] = elfs;
       born_of[i].push_back(k), born_of[j].push_back(k);
       ++stats.merged;

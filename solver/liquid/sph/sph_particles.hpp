@@ -40,7 +40,8 @@ struct SphParticles {
   std::vector<std::int8_t> level;  ///< 0 = the smallest
   std::vector<double> mass;
   std::vector<double> radius;    ///< support radius
-  std::vector<double> density;   ///< rho_i of the last force evaluation
+  std::vector<double> density;   ///< rho_i: carried (continuity) or of the last force evaluation (summation)
+  std::vector<double> drho;      ///< D rho_i / Dt of the last force evaluation (continuity)
   std::vector<double> pressure;  ///< P_i of the last force evaluation
   std::vector<double> distance;  ///< d_i: the carried particle-to-surface distance (>= 0)
   std::vector<Vec<Dim>> foot;    ///< y_i: the closest surface point found by the last redistancing
@@ -49,14 +50,16 @@ struct SphParticles {
   int size() const { return static_cast<int>(x.size()); }
 
   /// Appends a particle of `level` at rest-state values; returns its index.
-  int add(const Sizes& sizes, const Vec<Dim>& position, const Vec<Dim>& velocity, int level_, double dist) {
+  int add(const Sizes& sizes, const Vec<Dim>& position, const Vec<Dim>& velocity, int level_, double dist,
+          double rho = 0.0) {
     x.push_back(position);
     v.push_back(velocity);
     a.push_back(Vec<Dim>::Zero());
     level.push_back(static_cast<std::int8_t>(level_));
     mass.push_back(sizes.mass_of(level_));
     radius.push_back(sizes.radius_of<Dim>(level_));
-    density.push_back(0.0);
+    density.push_back(rho);
+    drho.push_back(0.0);
     pressure.push_back(0.0);
     distance.push_back(dist);
     foot.push_back(position);
@@ -71,13 +74,13 @@ struct SphParticles {
       if (!alive[i]) continue;
       if (n != i) {
         x[n] = x[i], v[n] = v[i], a[n] = a[i], level[n] = level[i], mass[n] = mass[i];
-        radius[n] = radius[i], density[n] = density[i], pressure[n] = pressure[i];
+        radius[n] = radius[i], density[n] = density[i], drho[n] = drho[i], pressure[n] = pressure[i];
         distance[n] = distance[i], foot[n] = foot[i], elfs[n] = elfs[i];
       }
       ++n;
     }
     x.resize(n), v.resize(n), a.resize(n), level.resize(n), mass.resize(n), radius.resize(n);
-    density.resize(n), pressure.resize(n), distance.resize(n), foot.resize(n), elfs.resize(n);
+    density.resize(n), drho.resize(n), pressure.resize(n), distance.resize(n), foot.resize(n), elfs.resize(n);
   }
 
   double total_mass() const {

@@ -10,6 +10,7 @@
 #include "liquid/core/error.hpp"
 #include "liquid/levelset/levelset.hpp"
 #include "liquid/sph/adaptive_sph.hpp"
+#include "liquid/sph/boundary.hpp"
 #include "liquid/sph/distance_surface.hpp"
 #include "liquid/sph/feature_size.hpp"
 #include "liquid/sph/forces.hpp"
@@ -40,6 +41,8 @@ void kernels_are_normalised() {
     EXPECT_NEAR(radial_integral<Dim>([&](double q) { return K::spiky(q, r); }, r), 1.0, 1e-8)
         << Dim << "D r=" << r;
     EXPECT_NEAR(radial_integral<Dim>([&](double q) { return K::viscosity(q, r); }, r), 1.0, 1e-4)
+        << Dim << "D r=" << r;
+    EXPECT_NEAR(radial_integral<Dim>([&](double q) { return K::wendland(q, r); }, r), 1.0, 1e-8)
         << Dim << "D r=" << r;
   }
 }
@@ -86,6 +89,39 @@ TEST(SphKernels, GradientAndLaplacianMatchDifferences3D) {
   derivatives_match_differences<3>();
 }
 
+template <int Dim>
+void wall_shares_are_the_kernel_beyond_a_plane() {
+  // Half of a radially symmetric kernel lies beyond a plane through its centre, none beyond one at
+  // distance r; the plane integral is minus the slope of the share (checked by differences).
+  for (KernelSet set : {KernelSet::wendland, KernelSet::spiky, KernelSet::mueller}) {
+    EXPECT_NEAR(Boundary<Dim>::beyond(set, 0.0), 0.5, 2e-4) << to_string(set);
+    EXPECT_EQ(Boundary<Dim>::beyond(set, 1.0), 0.0);
+    for (double delta : {0.2, 0.5, 0.8}) {
+      const double e = 1e-3;
+      const double slope =
+          (Boundary<Dim>::beyond(set, delta + e) - Boundary<Dim>::beyond(set, delta - e)) / (2 * e);
+      EXPECT_NEAR(-slope, Boundary<Dim>::on_plane(set, delta),
+                  2e-3 * (1.0 + Boundary<Dim>::on_plane(set, delta)))
+          << to_string(set) << " at " << delta;
+    }
+  }
+  // Beside one wall of the container the share is that plane's; in a corner two walls count once each.
+  const Boundary<Dim> walls(Box<Dim>{Vec<Dim>::Zero(), Vec<Dim>::Ones()}, {});
+  Vec<Dim> x = Vec<Dim>::Constant(0.5);
+  x[0] = 0.03;
+  EXPECT_NEAR(walls.share(x, 0.1, KernelSet::wendland), Boundary<Dim>::beyond(KernelSet::wendland, 0.3),
+              1e-12);
+  x[1] = 0.03;
+  const double one = Boundary<Dim>::beyond(KernelSet::wendland, 0.3);
+  EXPECT_NEAR(walls.share(x, 0.1, KernelSet::wendland), 1.0 - (1.0 - one) * (1.0 - one), 1e-12);
+}
+TEST(SphBoundary, WallSharesAreTheKernelBeyondAPlane2D) {
+  wall_shares_are_the_kernel_beyond_a_plane<2>();
+}
+TEST(SphBoundary, WallSharesAreTheKernelBeyondAPlane3D) {
+  wall_shares_are_the_kernel_beyond_a_plane<3>();
+}
+
 /// Random particles of levels 0..2 in the unit box, with random velocities.
 template <int Dim>
 SphParticles<Dim> random_particles(const Sizes& sizes, int n, std::uint64_t seed) {
@@ -108,18 +144,22 @@ void neighbours_match_brute_force() {
   const SphParticles<Dim> p = random_particles<Dim>(sizes, 600, 5);
   const PointTree<Dim> tree(p.x);
   const NeighbourLists nbrs = find_neighbours<Dim>(tree, p.x, p.radius);
+  const NeighbourLists cells = find_neighbours_cells<Dim>(p.x, p.radius);
   for (int i = 0; i < p.size(); ++i) {
     std::vector<int> expected;
     for (int j = 0; j < p.size(); ++j)
       if (j != i && (p.x[i] - p.x[j]).norm() < std::max(p.radius[i], p.radius[j])) expected.push_back(j);
     const auto row = nbrs.of(i);
     ASSERT_EQ(std::vector<int>(row.begin(), row.end()), expected) << "particle " << i;
+    const auto cell_row = cells.of(i);
+    ASSERT_EQ(std::vector<int>(cell_row.begin(), cell_row.end()), expected)
+        << "particle " << i << " (cell list)";
   }
 }
-TEST(SphNeighbours, MatchBruteForceWithMixedRadii2D) {
+TEST(SphNeighbours, TreeAndCellListMatchBruteForceWithMixedRadii2D) {
   neighbours_match_brute_force<2>();
 }
-TEST(SphNeighbours, MatchBruteForceWithMixedRadii3D) {
+TEST(SphNeighbours, TreeAndCellListMatchBruteForceWithMixedRadii3D) {
   neighbours_match_brute_force<3>();
 }
 

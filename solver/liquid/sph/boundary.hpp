@@ -1,0 +1,57 @@
+#pragma once
+// Walls for SPH particles as a continuum: the container's faces and the obstacles (level sets,
+// negative inside the solid) add to a particle's density the kernel mass that lies beyond them, and
+// push back with the gradient of that share. With only collisions, the particles next to a wall miss
+// the kernel mass beyond it, read a low density and are crushed against the wall until the lattice
+// collapses there (measured: the still 2D tank reached speeds of 8 sqrt(gH)); with the wall's share
+// counted they sit at rest. Each wall is taken as the plane
+// tangent to it at the particle's distance d, so its share is a function of d / r alone:
+//   density    rho_0 Phi(d / r),    Phi(delta) = the density kernel's mass beyond a plane at delta r
+//   pressure   a = (P_i rho_0 / rho_i^2) |Phi'(d / r)| / r  along the wall's normal, into the liquid:
+//              -(P_i / rho_i^2) grad(the wall's share of rho_i), the force that conserves energy with
+//              that share. (A mirrored wall at the particle's pressure, the pair force of Eq. 1 summed
+//              over the wall, pushes twice as hard and does not: measured, it set the bottom layer of
+//              a still tank moving at 0.4-1 m/s within 0.2 s.) Phi and its
+// derivative are tabulated once per dimension (1024 points, linear interpolation). Near a corner
+// several walls are within reach: the mass beyond any of them is taken as 1 - prod_k (1 - Phi_k),
+// exact for one wall and for a kernel that factorises along the axes (a Gaussian); summing the
+// Phi_k instead counts the corner's quadrant twice, which read 9% above rho_0 at a 2D tank's corner
+// and kicked its particles at 1 m/s.
+
+#include <vector>
+
+#include "liquid/core/types.hpp"
+#include "liquid/levelset/levelset.hpp"
+#include "liquid/sph/fluid.hpp"
+
+namespace liquid::sph {
+
+template <int Dim>
+class Boundary {
+ public:
+  Boundary() = default;
+  Boundary(const Box<Dim>& container, std::vector<levelset::Function<Dim>> obstacles);
+
+  /// The walls' share of the density kernel around x (support r): the kernel mass beyond them, in
+  /// [0, 1]; they add rho_0 times it to the density.
+  double share(const Vec<Dim>& x, double r, KernelSet kernels) const;
+  /// The gradient of share() with respect to x (it points into the walls). The walls push a particle
+  /// with a = -(P rho_0 / rho^2) grad share and, with a continuity density, change its density at
+  /// the rate rho_0 grad share . v.
+  Vec<Dim> share_gradient(const Vec<Dim>& x, double r, KernelSet kernels) const;
+
+  /// The density kernel's mass beyond a plane at distance delta * r, for r = 1; 0 for delta >= 1.
+  static double beyond(KernelSet kernels, double delta);
+  /// -d/d delta of beyond(): the density kernel integrated over the plane at delta.
+  static double on_plane(KernelSet kernels, double delta);
+
+ private:
+  template <class F>
+  void for_each_wall(const Vec<Dim>& x, double r, F f) const;
+
+  Box<Dim> container_;
+  bool has_container_ = false;
+  std::vector<levelset::Function<Dim>> obstacles_;
+};
+
+}  // namespace liquid::sph
