@@ -138,8 +138,9 @@ CaseResult run(const CaseOptions& options) {
     table.add_row({name, long(r.particles), levels, double(r.particles) / single.particles, r.steps,
                    r.seconds_per_step, r.split, r.merged, r.density, r.pressure, r.speed, r.volume_drift});
     auto per_step = [&](const char* phase) { return r.timer.seconds(phase) / static_cast<double>(r.steps); };
-    phases.add_row({name, per_step("neighbours"), per_step("forces"), per_step("redistance"), per_step("elfs"),
-                    per_step("resample"), per_step("integrate"), per_step("collisions"), per_step("total")});
+    phases.add_row({name, per_step("neighbours"), per_step("forces"), per_step("redistance"),
+                    per_step("elfs"), per_step("resample"), per_step("integrate"), per_step("collisions"),
+                    per_step("total")});
     result.gate.push_back({name + " density error", GateFigure::Kind::error, r.density});
     result.gate.push_back({name + " pressure error", GateFigure::Kind::error, r.pressure});
     result.gate.push_back({name + " spurious speed", GateFigure::Kind::error, r.speed});
