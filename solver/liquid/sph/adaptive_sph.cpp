@@ -239,9 +239,15 @@ SphStepReport AdaptiveSph<Dim>::advance(double dt) {
 }
 
 template <int Dim>
-void AdaptiveSph<Dim>::relax(double duration) {
+void AdaptiveSph<Dim>::relax(double duration, const Box<Dim>* hold) {
   LIQUID_VERIFY(duration >= 0.0 && std::isfinite(duration), "sph: the relaxation time must be >= 0, not {}",
                 duration);
+  const Box<Dim> container = options_.container;
+  if (hold) {
+    LIQUID_VERIFY(hold->valid(), "sph: the box that holds the liquid while it settles must have lo < hi");
+    options_.container = *hold;
+    walls_ = Boundary<Dim>(*hold, options_.obstacles);
+  }
   const double tau = duration / 8.0;
   double t = 0.0;
   while (t < duration) {
@@ -253,6 +259,10 @@ void AdaptiveSph<Dim>::relax(double duration) {
     t += dt;
   }
   for (auto& v : p_.v) v.setZero();
+  if (hold) {
+    options_.container = container;
+    walls_ = Boundary<Dim>(container, options_.obstacles);
+  }
   time_ = 0.0, steps_ = 0;
   timer_.clear();
 }

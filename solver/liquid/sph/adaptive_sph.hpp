@@ -88,8 +88,9 @@ class AdaptiveSph {
   /// then velocities zeroed and the clock, step count and timers reset. A lattice seeded at rho_0
   /// otherwise starts by falling into its hydrostatic compression, and the acoustic oscillation
   /// that follows (measured in a 2D tank: kinetic energy 1 J per metre, speeds 0.1 sqrt(gH)) lasts
-  /// for seconds.
-  void relax(double duration);
+  /// for seconds. With `hold`, the liquid settles inside that box instead of the container (a dam's
+  /// gate, removed when relax() returns).
+  void relax(double duration, const Box<Dim>* hold = nullptr);
   /// dt by the speed of sound, the fastest particle, the largest acceleration and the viscosity:
   /// min(cfl s / (c + |v|max), 0.25 sqrt(s / |a|max), 0.125 rho_0 s^2 / mu), capped at max_dt, with
   /// s the level-0 spacing (the paper's fixed step is dictated by the smallest particles too).
