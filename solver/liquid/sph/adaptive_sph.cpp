@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include <fmt/ranges.h>
+
 #include "liquid/core/error.hpp"
 #include "liquid/sph/kernels.hpp"
 
@@ -187,9 +189,8 @@ SphStepReport AdaptiveSph<Dim>::advance(double dt) {
     }
     compute_accelerations<Dim>(p_, nbrs_, options_.fluid, options_.gravity, &walls_);
     for (int i = 0; i < p_.size(); ++i) {
-      LIQUID_VERIFY(std::isfinite(p_.density[i]) && p_.a[i].allFinite(),
-                    "sph: particle {} (level {}) at step {}, t = {}: density {}, acceleration not finite", i,
-                    int(p_.level[i]), steps_, time_, p_.density[i]);
+      if (!std::isfinite(p_.density[i]) || !std::isfinite(p_.drho[i]) || !p_.a[i].allFinite())
+        throw_not_finite(i);
       report.max_density_error =
           std::max(report.max_density_error, std::abs(p_.density[i] / options_.fluid.rest_density - 1.0));
     }
@@ -236,6 +237,28 @@ SphStepReport AdaptiveSph<Dim>::advance(double dt) {
     report.max_speed = std::max(report.max_speed, p_.v[i].norm());
   }
   return report;
+}
+
+template <int Dim>
+void AdaptiveSph<Dim>::throw_not_finite(int i) const {
+  // Names the particle and the first term of its acceleration that is not finite.
+  std::string culprit = "gravity";
+  for (int j : nbrs_.of(i))
+    if (!pair_force<Dim>(p_, i, j, options_.fluid).allFinite()) {
+      culprit = fmt::format(
+          "the pair force from particle {} (level {}, {:.3g} away, density {:.6g}, velocity {})", j,
+          int(p_.level[j]), (p_.x[i] - p_.x[j]).norm(), p_.density[j], fmt::join(p_.v[j], ", "));
+      break;
+    }
+  if (culprit == "gravity" &&
+      !walls_.share_gradient(p_.x[i], p_.radius[i], options_.fluid.kernels).allFinite())
+    culprit = "the walls' push";
+  if (culprit == "gravity" && !p_.v[i].allFinite()) culprit = "its own velocity (the last step's kick)";
+  throw Error(fmt::format(
+      "sph: particle {} (level {}) at step {}, t = {} s: density {}, its rate {}, acceleration ({}): not all "
+      "finite; position ({}), velocity ({}), pressure {}; not finite: {}",
+      i, int(p_.level[i]), steps_, time_, p_.density[i], p_.drho[i], fmt::join(p_.a[i], ", "),
+      fmt::join(p_.x[i], ", "), fmt::join(p_.v[i], ", "), p_.pressure[i], culprit));
 }
 
 template <int Dim>

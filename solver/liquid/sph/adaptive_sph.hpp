@@ -115,6 +115,9 @@ class AdaptiveSph {
  private:
   void find_neighbours_now(bool with_tree);
   void collide();
+  /// Throws liquid::Error naming particle i, its state and the term of its acceleration that is not
+  /// finite.
+  [[noreturn]] void throw_not_finite(int i) const;
 
   SphOptions<Dim> options_;
   Sizes sizes_;

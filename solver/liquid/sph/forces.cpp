@@ -91,8 +91,9 @@ void compute_density_rate(SphParticles<Dim>& p, const NeighbourLists& nbrs, cons
         // difference of a liquid at rest, which the diffusion must not flatten (Fourtakas et al. 2019).
         const double h = 0.25 * (p.radius[i] + p.radius[j]);
         const double jump = p.density[j] - p.density[i] + hydrostatic * gravity.dot(xij);
+        // (+ (0.1 h)^2 below: two particles clamped into the same corner by the walls sit on one point.)
         rate += fluid.density_diffusion * h * c * (p.mass[j] / p.density[j]) * 2.0 * jump * (-xij.dot(grad)) /
-                xij.squaredNorm();
+                (xij.squaredNorm() + 0.01 * h * h);
       }
     }
     if (walls)
