@@ -99,9 +99,10 @@ void AdaptiveSph<Dim>::seed(const levelset::Function<Dim>& liquid, const Vec<Dim
 
 template <int Dim>
 void AdaptiveSph<Dim>::find_neighbours_now(bool with_tree) {
-  if (options_.search == NeighbourSearch::kd_tree || with_tree) tree_.build(p_.x);
-  nbrs_ = options_.search == NeighbourSearch::kd_tree ? find_neighbours<Dim>(tree_, p_.x, p_.radius)
-                                                      : find_neighbours_cells<Dim>(p_.x, p_.radius);
+  const bool kd = options_.search == NeighbourSearch::kd_tree ||
+                  (options_.search == NeighbourSearch::automatic && Dim == 3 && options_.adaptive);
+  if (kd || with_tree) tree_.build(p_.x);
+  nbrs_ = kd ? find_neighbours<Dim>(tree_, p_.x, p_.radius) : find_neighbours_cells<Dim>(p_.x, p_.radius);
 }
 
 template <int Dim>

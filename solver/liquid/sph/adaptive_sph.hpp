@@ -49,7 +49,7 @@ struct SphOptions {
   /// 5000); with 0.5 the passes settle within 8 (1140 particles, 2-4 changes a pass).
   double disk_radius = 0.5;
   /// How the neighbour lists are found; the k-d tree is built on redistancing steps either way.
-  NeighbourSearch search = NeighbourSearch::cell_list;
+  NeighbourSearch search = NeighbourSearch::automatic;
   double restitution = 0.0;  ///< normal velocity kept (reversed) at a wall
   std::uint64_t seed = 1;    ///< the split directions' random stream
 

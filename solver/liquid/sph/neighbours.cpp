@@ -116,7 +116,9 @@ NeighbourLists find_neighbours(const PointTree<Dim>& tree, std::span<const Vec<D
 }
 
 const char* to_string(NeighbourSearch search) {
-  return search == NeighbourSearch::cell_list ? "cell-list" : "kd-tree";
+  return search == NeighbourSearch::automatic   ? "automatic"
+         : search == NeighbourSearch::cell_list ? "cell-list"
+                                                : "kd-tree";
 }
 
 template <int Dim>
