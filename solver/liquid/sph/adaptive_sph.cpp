@@ -112,23 +112,27 @@ SphStepReport AdaptiveSph<Dim>::adapt_now() {
     auto t = timer_.scope("neighbours");
     find_neighbours_now(true);
   }
+  redistance_and_resample(report);
+  report.particles = p_.size();
+  return report;
+}
+
+template <int Dim>
+void AdaptiveSph<Dim>::redistance_and_resample(SphStepReport& report) {
   {
     auto t = timer_.scope("redistance");
     report.redistancing =
         redistance<Dim>(p_, nbrs_, tree_, options_.projection_bisections, options_.disk_radius);
   }
   report.resampled = true;
-  if (options_.adaptive) {
-    {
-      auto t = timer_.scope("elfs");
-      report.features = feature_size<Dim>(p_, nbrs_, options_.gamma_degrees);
-    }
-    auto t = timer_.scope("resample");
-    const SolidTest<Dim> solid = [this](const Vec<Dim>& x) { return in_solid(x); };
-    report.resampling = resample<Dim>(p_, nbrs_, sizes_, options_.resampling, solid, rng_);
+  if (!options_.adaptive) return;
+  {
+    auto t = timer_.scope("elfs");
+    report.features = feature_size<Dim>(p_, nbrs_, options_.gamma_degrees);
   }
-  report.particles = p_.size();
-  return report;
+  auto t = timer_.scope("resample");
+  const SolidTest<Dim> solid = [this](const Vec<Dim>& x) { return in_solid(x); };
+  report.resampling = resample<Dim>(p_, nbrs_, sizes_, options_.resampling, solid, rng_);
 }
 
 template <int Dim>
@@ -196,23 +200,7 @@ SphStepReport AdaptiveSph<Dim>::advance(double dt) {
           std::max(report.max_density_error, std::abs(p_.density[i] / options_.fluid.rest_density - 1.0));
     }
   }
-  if (resampling) {
-    {
-      auto t = timer_.scope("redistance");
-      report.redistancing =
-          redistance<Dim>(p_, nbrs_, tree_, options_.projection_bisections, options_.disk_radius);
-    }
-    report.resampled = true;
-    if (options_.adaptive) {
-      {
-        auto t = timer_.scope("elfs");
-        report.features = feature_size<Dim>(p_, nbrs_, options_.gamma_degrees);
-      }
-      auto t = timer_.scope("resample");
-      const SolidTest<Dim> solid = [this](const Vec<Dim>& x) { return in_solid(x); };
-      report.resampling = resample<Dim>(p_, nbrs_, sizes_, options_.resampling, solid, rng_);
-    }
-  }
+  if (resampling) redistance_and_resample(report);
   {
     auto t = timer_.scope("integrate");
     const int n = p_.size();

@@ -115,6 +115,9 @@ class AdaptiveSph {
  private:
   void find_neighbours_now(bool with_tree);
   void collide();
+  /// The every-k-th-step phases on the current neighbour lists: redistance, and when adaptive elfs
+  /// and resample (timed under those names).
+  void redistance_and_resample(SphStepReport& report);
   /// Throws liquid::Error naming particle i, its state and the term of its acceleration that is not
   /// finite.
   [[noreturn]] void throw_not_finite(int i) const;

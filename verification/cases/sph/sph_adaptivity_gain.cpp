@@ -101,8 +101,9 @@ double front_at(const Run& r, double T) {
   return r.Z.back();
 }
 
+/// One dam break at spacing s; pushes its front curves to `series` (the report draws them).
 template <int Dim>
-CaseResult run_case(double s, const std::string& tag) {
+CaseResult run_case(double s, const std::string& tag, Json& series) {
   CaseResult result;
   const Run single = run_dam<Dim>(false, s), adaptive = run_dam<Dim>(true, s);
   Table table(fmt::format("{}D dam break, s = a/{:.0f}: single resolution against adaptive (paper Table 1)",
@@ -161,12 +162,33 @@ CaseResult run_case(double s, const std::string& tag) {
   result.gate.push_back({tag + "adaptive front from single", GateFigure::Kind::error, worst_pair});
   result.gate.push_back({tag + "single front from experiment", GateFigure::Kind::error, worst_single});
   result.gate.push_back({tag + "adaptive front from experiment", GateFigure::Kind::error, worst_adaptive});
+  std::vector<double> et, ez;
+  for (const auto& e : kExperiment) et.push_back(e[0]), ez.push_back(e[1]);
+  const std::string group =
+      fmt::format("{}front Z = x/a against T = t sqrt(2g/a), {}D, s = a/{:.0f}", tag, Dim, kA / s);
+  using Curve = std::tuple<const char*, const std::vector<double>*, const std::vector<double>*>;
+  for (const auto& [label, x, y] :
+       {Curve{"single", &single.T, &single.Z}, Curve{"adaptive", &adaptive.T, &adaptive.Z},
+        Curve{"Martin and Moyce 1952", &et, &ez}}) {
+    Json curve = series_entry(group, label, *x, *y, "T", "Z = x / a");
+    curve.set("scale", "linear");
+    series.push(std::move(curve));
+  }
   for (Table* t : {&table, &phases, &gain, &front}) result.tables.push_back(std::move(*t));
   return result;
 }
 
+CaseResult run_quick(const CaseOptions&) {
+  Json series = Json::array();
+  CaseResult r = run_case<2>(kA / 20, "", series);
+  r.fields.set("series", std::move(series));
+  return r;
+}
+
 CaseResult run_full(const CaseOptions&) {
-  CaseResult r2 = run_case<2>(kA / 80, "2D "), r3 = run_case<3>(kA / 16, "3D ");
+  Json series = Json::array();
+  CaseResult r2 = run_case<2>(kA / 80, "2D ", series), r3 = run_case<3>(kA / 16, "3D ", series);
+  r2.fields.set("series", std::move(series));
   for (auto* from : {&r3}) {
     for (auto& t : from->tables) r2.tables.push_back(std::move(t));
     for (auto& f : from->failures) r2.failures.push_back(f);
@@ -184,7 +206,7 @@ LIQUID_VERIFICATION_CASE(
     {"sph-adaptivity-gain",
      "SPH dam break (2D, s = a/20): adaptive against single resolution, particles, phase times, "
      "front against Martin and Moyce (Table 1)",
-     true, [](const CaseOptions&) { return run_case<2>(kA / 20, ""); }, no_options});
+     true, run_quick, no_options});
 LIQUID_VERIFICATION_CASE(
     {"sph-adaptivity-gain-full",
      "SPH dam break, 2D at s = a/80 and 3D at s = a/16: the gain table beside the paper's Table 1", false,
