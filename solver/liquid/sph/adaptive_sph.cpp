@@ -82,7 +82,8 @@ void AdaptiveSph<Dim>::seed(const levelset::Function<Dim>& liquid, const Vec<Dim
   while (true) {
     const Vec<Dim> x = offset + s * k.template cast<double>();
     const double phi = liquid(x);
-    LIQUID_VERIFY(std::isfinite(phi), "sph: the liquid's level set is not finite at a lattice point");
+    LIQUID_VERIFY(std::isfinite(phi), "sph: the liquid's level set is not finite at the lattice point ({})",
+                  fmt::join(x, ", "));
     if (phi < 0.0 && !in_solid(x)) p_.add(sizes_, x, velocity, 0, -phi, options_.fluid.rest_density);
     int d = 0;
     while (d < Dim && ++k[d] >= n[d]) k[d] = 0, ++d;
@@ -230,19 +231,26 @@ SphStepReport AdaptiveSph<Dim>::advance(double dt) {
 
 template <int Dim>
 void AdaptiveSph<Dim>::throw_not_finite(int i) const {
-  // Names the particle and the first term of its acceleration that is not finite.
-  std::string culprit = "gravity";
-  for (int j : nbrs_.of(i))
-    if (!pair_force<Dim>(p_, i, j, options_.fluid).allFinite()) {
-      culprit = fmt::format(
-          "the pair force from particle {} (level {}, {:.3g} away, density {:.6g}, velocity {})", j,
-          int(p_.level[j]), (p_.x[i] - p_.x[j]).norm(), p_.density[j], fmt::join(p_.v[j], ", "));
-      break;
-    }
-  if (culprit == "gravity" &&
-      !walls_.share_gradient(p_.x[i], p_.radius[i], options_.fluid.kernels).allFinite())
+  // Names the particle and the first of its terms that is not finite.
+  std::string culprit;
+  if (!std::isfinite(p_.density[i]))
+    culprit = "its own density (carried from the last step)";
+  else if (!std::isfinite(p_.drho[i]))
+    culprit = "its density rate (continuity and density diffusion)";
+  else
+    for (int j : nbrs_.of(i))
+      if (!pair_force<Dim>(p_, i, j, options_.fluid).allFinite()) {
+        culprit = fmt::format(
+            "the pair force from particle {} (level {}, {:.3g} away, density {:.6g}, velocity {})", j,
+            int(p_.level[j]), (p_.x[i] - p_.x[j]).norm(), p_.density[j], fmt::join(p_.v[j], ", "));
+        break;
+      }
+  if (culprit.empty() && !walls_.share_gradient(p_.x[i], p_.radius[i], options_.fluid.kernels).allFinite())
     culprit = "the walls' push";
-  if (culprit == "gravity" && !p_.v[i].allFinite()) culprit = "its own velocity (the last step's kick)";
+  else if (culprit.empty() && !p_.v[i].allFinite())
+    culprit = "its own velocity (the last step's kick)";
+  else if (culprit.empty())
+    culprit = "none found among its pair forces, the walls and its velocity";
   throw Error(fmt::format(
       "sph: particle {} (level {}) at step {}, t = {} s: density {}, its rate {}, acceleration ({}): not all "
       "finite; position ({}), velocity ({}), pressure {}; not finite: {}",
@@ -255,6 +263,17 @@ void AdaptiveSph<Dim>::relax(double duration, const Box<Dim>* hold) {
   LIQUID_VERIFY(duration >= 0.0 && std::isfinite(duration), "sph: the relaxation time must be >= 0, not {}",
                 duration);
   const Box<Dim> container = options_.container;
+  // Whatever happens (a step may throw), the container comes back.
+  struct Restore {
+    AdaptiveSph& sim;
+    const Box<Dim>& box;
+    bool active;
+    ~Restore() {
+      if (!active) return;
+      sim.options_.container = box;
+      sim.walls_ = Boundary<Dim>(box, sim.options_.obstacles);
+    }
+  } restore{*this, container, hold != nullptr};
   if (hold) {
     LIQUID_VERIFY(hold->valid(), "sph: the box that holds the liquid while it settles must have lo < hi");
     options_.container = *hold;
@@ -271,10 +290,6 @@ void AdaptiveSph<Dim>::relax(double duration, const Box<Dim>* hold) {
     t += dt;
   }
   for (auto& v : p_.v) v.setZero();
-  if (hold) {
-    options_.container = container;
-    walls_ = Boundary<Dim>(container, options_.obstacles);
-  }
   time_ = 0.0, steps_ = 0;
   timer_.clear();
 }

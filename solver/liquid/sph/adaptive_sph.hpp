@@ -1,7 +1,8 @@
 #pragma once
 // AdaptiveSph<Dim>: the adaptively sampled particle fluid of Adams et al. 2007. A step reads as
 // named, timed phases (PhaseTimer names):
-//   neighbours  k-d tree over the positions and the symmetric neighbour lists
+//   neighbours  the symmetric neighbour lists (cell list or k-d tree, SphOptions::search; the tree
+//               is built on redistancing steps either way)
 //   forces      density, pressure, pair forces, gravity
 //   redistance  (every k-th step) particle-to-surface distances on the distance surface
 //   elfs        (every k-th step, adaptive) medial axis and extended local feature size
@@ -77,7 +78,7 @@ class AdaptiveSph {
 
   /// Fills the liquid region (phi < 0) inside the container and outside the obstacles with a lattice
   /// of level-0 particles (spacing `spacing`, half a spacing from the container's walls), distances
-  /// from phi; calibrates the level-0 mass so that a full lattice has density rho_0; when adaptive,
+  /// from phi; (the level-0 mass, from the constructor, gives a full lattice density rho_0); when adaptive,
   /// resamples at rest until no particle changes (at most 2 max_level + 2 rounds).
   void seed(const levelset::Function<Dim>& liquid, const Vec<Dim>& velocity = Vec<Dim>::Zero());
 

@@ -116,11 +116,12 @@ Vec<Dim> Boundary<Dim>::share_gradient(const Vec<Dim>& x, double r, KernelSet ke
     double beyond, on_plane;
     Vec<Dim> n;
   };
-  Wall walls[2 * Dim + 8];
-  int count = 0;
+  thread_local std::vector<Wall> walls;  // every wall within reach, as share() counts them
+  walls.clear();
   for_each_wall(x, r, [&](double d, const Vec<Dim>& n) {
-    if (count < 2 * Dim + 8) walls[count++] = Wall{beyond(kernels, d / r), on_plane(kernels, d / r), n};
+    walls.push_back(Wall{beyond(kernels, d / r), on_plane(kernels, d / r), n});
   });
+  const int count = static_cast<int>(walls.size());
   Vec<Dim> g = Vec<Dim>::Zero();
   for (int k = 0; k < count; ++k) {
     double others = 1.0;

@@ -8,7 +8,7 @@
 //               integral of w_i: 1 deep inside a regular lattice, so the iso-level 1/2 sits near the
 //               last layer's edge
 // with the weights w_i(x) = (1 - (|x - x_i| / r_i)^2)^3 of Eq. 8. Where no particle reaches, phi is
-// -infinity-like: -(the largest radius).
+// -(the largest radius) for the distance and Zhu-Bridson models, -1/2 for the blobbies.
 //
 // Redistancing (Sec. 5.2): particles with d_i < r_i are projected onto phi = 0 along the gradient
 // (values at s = 0, r_i/2, r_i, `bisections` halvings of the interval that changes sign, then linear

@@ -5,8 +5,9 @@
 //   rho_i = sum_j m_j W(|x_i - x_j|, r_i)        (j = i included; W the density kernel, see below)
 //   P_i   = k (rho_i / rho_0 - 1)                (clamped at 0 unless negative pressure is on)
 //   f_ij  = -V_i V_j (P_i + P_j) gbar_ij + mu V_i V_j (v_j - v_i) lbar_ij,     V_i = m_i / rho_i
-//   gbar_ij = (grad W_spiky(x_i - x_j, r_i) + grad W_spiky(x_i - x_j, r_j)) / 2, lbar_ij likewise
-//             for the viscosity kernel's Laplacian.
+//   gbar_ij = (grad W(x_i - x_j, r_i) + grad W(x_i - x_j, r_j)) / 2 with W the pressure kernel
+//             (Wendland by default, spiky for the spiky and mueller sets), lbar_ij likewise for
+//             the viscosity kernel's Laplacian.
 //
 // The gradient is taken with respect to x_i: the paper writes x_ij = x_j - x_i, with which Eq. 1 as
 // printed would attract. Eq. 1 carries no 1/2 on (P_i + P_j), unlike Müller et al.'s force density;

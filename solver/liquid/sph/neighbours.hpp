@@ -1,8 +1,8 @@
 #pragma once
 // Neighbourhoods of multi-level particles (Adams et al. 2007, Sec. 3): p_j is a neighbour of p_i when
-// |x_i - x_j| <= max(r_i, r_j), a symmetric relation, found with a k-d tree (nanoflann) rebuilt once
-// per step. PointTree also answers the radius and nearest-point queries of the surface and the
-// feature-size estimate.
+// |x_i - x_j| < max(r_i, r_j) (strict: the kernels vanish at the support's edge), a symmetric
+// relation, found with a k-d tree (nanoflann) or a cell list. PointTree also answers the radius and
+// nearest-point queries of the surface and the feature-size estimate.
 
 #include <cstdint>
 #include <memory>

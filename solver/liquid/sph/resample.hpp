@@ -8,8 +8,8 @@
 // the parent's footpoint tangent plane, and outside every obstacle). Valid directions are found by
 // testing a set of candidate directions (2D: 180 angles; 3D: 600 quasi-uniform points on the sphere,
 // rotated at random per split) and one is picked at random; when none is valid, d is lowered by 20%
-// and the search repeated (at most 12 times, then the split is skipped and counted). Children keep
-// the parent's velocity and acceleration: mass and momentum are conserved exactly.
+// and the search repeated (12 tries in all, so d is lowered at most 11 times; then the split is skipped and
+// counted). Children keep the parent's velocity and acceleration: mass and momentum are conserved exactly.
 // Merge: two neighbours of the same level, both marked, become one of level l + 1 at their midpoint
 // when no other particle is within r_new / (2h) of it and it is outside every obstacle; otherwise the
 // next marked neighbour is tried. The new velocity (and acceleration) is the mass-weighted mean.
