@@ -110,6 +110,19 @@ struct CaseResult {
       failures.push_back(what);
     }
   }
+
+  /// Takes in another part of the same case (its 3D half, say): its tables, failures, notes and
+  /// warnings follow this one's, its gate figures are renamed `prefix` + name. `fields` stay this
+  /// one's.
+  void append(CaseResult&& other, const std::string& prefix = "") {
+    passed = passed && other.passed;
+    asserted = asserted || other.asserted;
+    for (auto& t : other.tables) tables.push_back(std::move(t));
+    for (auto& f : other.failures) failures.push_back(std::move(f));
+    for (auto& n : other.notes) notes.push_back(std::move(n));
+    for (auto& w : other.warnings) warnings.push_back(std::move(w));
+    for (auto& g : other.gate) gate.push_back({prefix + g.name, g.kind, g.value});
+  }
 };
 
 struct CaseInfo {

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <functional>
 #include <numbers>
 #include <random>
 
@@ -364,11 +365,69 @@ TEST(AdaptiveSph, SeedsCoarseParticlesDeepInsideAndKeepsTheVolume) {
 }
 
 TEST(AdaptiveSph, RefusesImpossibleOptions) {
+  const double nan = std::nan("");
+  const std::vector<std::pair<const char*, std::function<void(SphOptions<2>&)>>> bad{
+      {"spacing", [](SphOptions<2>& o) { o.spacing = -1.0; }},
+      {"spacing", [&](SphOptions<2>& o) { o.spacing = nan; }},
+      {"h (support", [](SphOptions<2>& o) { o.h_ratio = 0.5; }},
+      {"alpha", [](SphOptions<2>& o) { o.resampling.beta = 1.0; }},
+      {"rest density", [&](SphOptions<2>& o) { o.fluid.stiffness = nan; }},
+      {"rest density", [](SphOptions<2>& o) { o.fluid.viscosity = -1.0; }},
+      {"max_level", [](SphOptions<2>& o) { o.max_level = 99; }},
+      {"resample_every", [](SphOptions<2>& o) { o.resample_every = 0; }},
+      {"gamma", [&](SphOptions<2>& o) { o.gamma_degrees = nan; }},
+      {"disks", [](SphOptions<2>& o) { o.disk_radius = 0.0; }},
+      {"delta", [](SphOptions<2>& o) { o.fluid.density_diffusion = 1e9; }},
+      {"restitution", [](SphOptions<2>& o) { o.restitution = 2.0; }},
+      {"gravity", [&](SphOptions<2>& o) { o.gravity[1] = nan; }},
+      {"container", [](SphOptions<2>& o) { o.container.hi[0] = o.container.lo[0]; }},
+  };
+  for (const auto& [word, spoil] : bad) {
+    SphOptions<2> o;
+    spoil(o);
+    try {
+      AdaptiveSph<2> sim(o);
+      ADD_FAILURE() << "accepted a bad " << word;
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find(word), std::string::npos) << e.what();
+    }
+  }
+}
+
+TEST(AdaptiveSph, SettlesBehindAGateAndThenOpensIt) {
   SphOptions<2> o;
-  o.spacing = -1.0;
-  EXPECT_THROW(AdaptiveSph<2>{o}, Error);
-  o.spacing = 0.01, o.resampling.beta = 1.0;
-  EXPECT_THROW(AdaptiveSph<2>{o}, Error);
+  o.container = Box<2>{Vec<2>(0, 0), Vec<2>(1, 0.6)};
+  o.spacing = 0.02;
+  o.adaptive = false;
+  AdaptiveSph<2> sim(o);
+  const Box<2> gate{Vec<2>(0, 0), Vec<2>(0.2, 0.4)};
+  sim.seed(levelset::box<2>(gate));
+  sim.relax(0.05, &gate);
+  for (const auto& x : sim.particles().x)
+    ASSERT_LE(x[0], 0.2 + 1e-12) << "a particle left the gate while settling";
+  EXPECT_EQ(sim.time(), 0.0);
+  EXPECT_FALSE(sim.in_solid(Vec<2>(0.5, 0.1))) << "the container was not restored";
+  for (int k = 0; k < 200; ++k) sim.advance(sim.stable_dt());
+  double front = 0.0;
+  for (const auto& x : sim.particles().x) front = std::max(front, x[0]);
+  EXPECT_GT(front, 0.22) << "the column did not spread once the gate opened";
+}
+
+TEST(AdaptiveSph, NamesTheParticleWhoseStateIsNotFinite) {
+  SphOptions<2> o;
+  o.container = Box<2>{Vec<2>(0, 0), Vec<2>(1, 1)};
+  o.spacing = 0.05;
+  o.adaptive = false;
+  AdaptiveSph<2> sim(o);
+  sim.seed(levelset::box<2>(Box<2>{Vec<2>(0, 0), Vec<2>(1, 0.5)}));
+  sim.particles().density[0] = std::nan("");
+  try {
+    sim.advance(1e-4);
+    FAIL() << "a NaN density went unnoticed";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("sph: particle 0 "), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("its own density"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace

@@ -187,17 +187,10 @@ CaseResult run_quick(const CaseOptions&) {
 
 CaseResult run_full(const CaseOptions&) {
   Json series = Json::array();
-  CaseResult r2 = run_case<2>(kA / 80, "2D ", series), r3 = run_case<3>(kA / 16, "3D ", series);
-  r2.fields.set("series", std::move(series));
-  for (auto* from : {&r3}) {
-    for (auto& t : from->tables) r2.tables.push_back(std::move(t));
-    for (auto& f : from->failures) r2.failures.push_back(f);
-    for (auto& g : from->gate) r2.gate.push_back(g);
-    for (auto& n : from->notes) r2.notes.push_back(n);
-    for (auto& w : from->warnings) r2.warnings.push_back(w);
-    r2.passed = r2.passed && from->passed;
-  }
-  return r2;
+  CaseResult result = run_case<2>(kA / 80, "2D ", series);
+  result.append(run_case<3>(kA / 16, "3D ", series));
+  result.fields.set("series", std::move(series));
+  return result;
 }
 
 }  // namespace

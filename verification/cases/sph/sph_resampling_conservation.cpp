@@ -141,10 +141,17 @@ CaseResult run(const CaseOptions&) {
       }
     }
   }
+  result.tables.push_back(std::move(table));
+  return result;
+}
+
+CaseResult run_both(const CaseOptions& options) {
+  CaseResult result;
+  result.append(run<2>(options), "2D ");
+  result.append(run<3>(options), "3D ");
   result.notes.push_back(
       "the split's valid directions are searched among 180 angles (2D) or 600 points of a Fibonacci sphere "
       "(3D), turned at random per split; the paper intersects the forbidden caps exactly");
-  result.tables.push_back(std::move(table));
   return result;
 }
 
@@ -154,20 +161,6 @@ LIQUID_VERIFICATION_CASE(
     {"sph-resampling-conservation",
      "SPH split and merge on random and lattice configurations (2D and 3D): mass, momentum, "
      "centre of mass, placement",
-     true,
-     [](const CaseOptions& o) {
-       CaseResult r2 = run<2>(o), r3 = run<3>(o);
-       for (auto& t : r3.tables) r2.tables.push_back(std::move(t));
-       for (auto& f : r3.failures) r2.failures.push_back(f);
-       for (auto& g : r3.gate) {
-         g.name = "3D " + g.name;
-         r2.gate.push_back(g);
-       }
-       for (auto& g : r2.gate)
-         if (g.name.rfind("3D ", 0) != 0) g.name = "2D " + g.name;
-       r2.passed = r2.passed && r3.passed;
-       return r2;
-     },
-     no_options});
+     true, run_both, no_options});
 
 }  // namespace liquid::verification
