@@ -1,8 +1,11 @@
-// liquid: runs a scene of the adaptive PIC solver and prints the paper's Table 1 row for it.
+// liquid: runs a scene of the adaptive PIC solver (RBF Liquids) or of the adaptive SPH solver
+// (Adams et al. 2007) and prints the paper's Table 1 row for it.
 //
 //   liquid scenes                                   the built-in scenes, one line each
 //   liquid run dam-break-2d --out out/             a built-in scene (or a path to a .toml file)
 //   liquid run drop-3d --finest 6 --method apic     overrides: levels, method, end
+//   liquid run sph-dam-break-2d --spacing 0.005     an SPH scene; --regular: single resolution
+//   liquid run dam-break-2d --method sph            a PIC scene run by SPH (spacing: half the finest cell)
 //   liquid run --resume out/drop-3d_checkpoint_000040.h5 --out out/
 //
 // Exit status: 0 done; 1 the run failed while stepping (a NaN, a PPE that did not converge: the
@@ -21,6 +24,7 @@
 #include "liquid/core/error.hpp"
 #include "liquid/linalg/solver.hpp"
 #include "liquid/scene/runner.hpp"
+#include "liquid/scene/sph_runner.hpp"
 
 namespace {
 
@@ -90,25 +94,89 @@ void echo(const Scene<Dim>& s, const RunSettings& settings, bool resumed) {
   std::fflush(stdout);
 }
 
+template <int Dim>
+void echo_sph(const Scene<Dim>& s, const RunSettings& settings, bool resumed) {
+  const sph::SphOptions<Dim> o = sph_options<Dim>(s);
+  const SphScene<Dim>& sc = s.sph_scene;
+  fmt::print("liquid run: scene {} ({}D, SPH) from {}{}\n", s.name, Dim, s.path, resumed ? " (resumed)" : "");
+  if (!s.description.empty()) fmt::print("  {}\n", s.description);
+  fmt::print("  container   [{}] to [{}]\n", fmt::join(o.container.lo.data(), o.container.lo.data() + Dim, ", "),
+             fmt::join(o.container.hi.data(), o.container.hi.data() + Dim, ", "));
+  fmt::print("  particles   spacing {:.4g} m (support radius {:.4g}), {}\n", o.spacing, o.h_ratio * o.spacing,
+             o.adaptive ? fmt::format("adaptive, levels 0-{} (alpha {}, beta {}), resampled every {} steps",
+                                      o.max_level, o.resampling.alpha, o.resampling.beta, o.resample_every)
+                        : std::string("single resolution (level 0 only)"));
+  fmt::print("  fluid       rho_0 {} kg/m^{}, sound speed {:.3g} m/s{}, viscosity {} Pa s\n", o.fluid.rest_density, Dim,
+             sph_sound_speed<Dim>(s), sc.sound_speed > 0 ? "" : " (10x the fastest expected speed)",
+             o.fluid.viscosity);
+  fmt::print("  model       kernels {}, density {}, pressure {}, neighbours {}, surface {}\n",
+             sph::to_string(o.fluid.kernels), sph::to_string(o.fluid.density_update),
+             sph::to_string(o.fluid.pressure_form), sph::to_string(o.search), sph::to_string(sc.surface));
+  fmt::print("  gravity     ({}); solids {}; sources {}{}\n", fmt::join(o.gravity.data(), o.gravity.data() + Dim, ", "),
+             o.obstacles.empty() ? "none" : "yes", o.sources.size(),
+             o.rotation.active() ? fmt::format("; the container turns {:.4g} degrees in {} s",
+                                               o.rotation.angle * 180.0 / 3.141592653589793, o.rotation.duration)
+                                 : "");
+  if (sc.settle > 0)
+    fmt::print("  settle      {} s before t = 0{}\n", sc.settle, sc.gate ? ", held behind the gate" : "");
+  if (s.time.steps >= 0)
+    fmt::print("  time        {} steps", s.time.steps);
+  else
+    fmt::print("  time        to t = {} s", s.time.end);
+  fmt::print(", CFL {} (of the sound speed), dt in [{:.2g}, {:.2g}] s\n", s.time.cfl, s.time.dt_min, s.time.dt_max);
+  if (settings.out.empty())
+    fmt::print("  output      none (no --out)\n");
+  else
+    fmt::print("  output      {}: {}{}\n", settings.out,
+               settings.frames ? (s.output.every > 0 ? fmt::format("a frame every {} s", s.output.every)
+                                                     : std::string("first and last frame"))
+                               : std::string("no frames"),
+               settings.checkpoint_every > 0
+                   ? fmt::format(", a checkpoint every {} steps", settings.checkpoint_every)
+                   : "");
+  fmt::print("  threads     {}\n", omp_get_max_threads());
+  std::fflush(stdout);
+}
+
 /// One line of progress: a bar on a terminal (rewritten in place), plain lines otherwise.
 class Progress {
  public:
   explicit Progress(bool quiet) : tty_(isatty(fileno(stdout)) != 0), quiet_(quiet) {}
   template <int Dim>
   void update(const SceneRunner<Dim>& run, bool last) {
-    if (quiet_) return;
     const Scene<Dim>& s = run.scene();
     const AdaptivePic<Dim>& sim = run.solver();
-    const double f =
-        s.time.steps >= 0 ? static_cast<double>(sim.step()) / s.time.steps : sim.time() / s.time.end;
     const PicStepReport& r = run.last();
-    const auto& phases = sim.timer().entries();
+    show(fraction(s, sim.step(), sim.time()),
+         fmt::format("t = {:.4f} s  step {}  particles {}  cells {} ({} fluid)  {:.3f} s/step", sim.time(),
+                     sim.step(), r.n_particles, r.n_cells, r.n_fluid_cells, per_step(sim.timer())),
+         last);
+  }
+  template <int Dim>
+  void update(const SphSceneRunner<Dim>& run, bool last) {
+    const Scene<Dim>& s = run.scene();
+    const sph::AdaptiveSph<Dim>& sim = run.solver();
+    const sph::SphStepReport& r = run.last();
+    std::string levels;
+    for (std::size_t l = 0; l < r.per_level.size(); ++l) levels += fmt::format("{}{}", l ? "/" : "", r.per_level[l]);
+    show(fraction(s, sim.steps(), sim.time()),
+         fmt::format("t = {:.4f} s  step {}  particles {} (levels {})  {:.4f} s/step", sim.time(), sim.steps(),
+                     r.particles, levels, per_step(sim.timer())),
+         last);
+  }
+
+ private:
+  template <int Dim>
+  static double fraction(const Scene<Dim>& s, long step, double time) {
+    return s.time.steps >= 0 ? static_cast<double>(step) / s.time.steps : time / s.time.end;
+  }
+  static double per_step(const PhaseTimer& timer) {
+    const auto& phases = timer.entries();
     const auto total = phases.find("total");
-    const double per_step =
-        total != phases.end() && total->second.calls > 0 ? total->second.seconds / total->second.calls : 0.0;
-    const std::string text =
-        fmt::format("t = {:.4f} s  step {}  particles {}  cells {} ({} fluid)  {:.3f} s/step", sim.time(),
-                    sim.step(), r.n_particles, r.n_cells, r.n_fluid_cells, per_step);
+    return total != phases.end() && total->second.calls > 0 ? total->second.seconds / total->second.calls : 0.0;
+  }
+  void show(double f, const std::string& text, bool last) {
+    if (quiet_) return;
     if (tty_) {
       const int width = 24, filled = static_cast<int>(std::round(std::clamp(f, 0.0, 1.0) * width));
       fmt::print("\r[{}{}] {:3.0f}%  {}\033[K", std::string(filled, '#'), std::string(width - filled, '.'),
@@ -124,7 +192,6 @@ class Progress {
     std::fflush(stdout);
   }
 
- private:
   bool tty_, quiet_;
   int printed_ = -1;
 };
@@ -160,6 +227,17 @@ void print_summary(const RunSummary& s, const std::string& name, int dim) {
   fmt::print("  wall time {:.2f} s\n", s.wall);
 }
 
+void write_text(const std::string& path, const std::string& text) {
+  const std::string tmp = path + ".tmp";
+  {
+    std::ofstream out(tmp, std::ios::trunc);
+    out << text;
+    out.close();
+    LIQUID_VERIFY(out.good(), "cannot write {}", tmp);
+  }
+  LIQUID_VERIFY(std::rename(tmp.c_str(), path.c_str()) == 0, "cannot rename {} to {}", tmp, path);
+}
+
 void write_json(const std::string& path, const RunSummary& s, const std::string& name, int dim) {
   std::string phases;
   for (const auto& [phase, t] : s.seconds)
@@ -172,14 +250,88 @@ void write_json(const std::string& path, const RunSummary& s, const std::string&
       "  \"seconds_per_step\": {{{}}}\n}}\n",
       name, dim, s.steps, s.time, s.threads, s.fluid_cells, s.cells, s.particles, s.regular_cells,
       s.regular_particles, s.ppe_iterations, s.ppe_failures, s.ppe_reused, s.wall, phases);
-  const std::string tmp = path + ".tmp";
-  {
-    std::ofstream out(tmp, std::ios::trunc);
-    out << text;
-    out.close();
-    LIQUID_VERIFY(out.good(), "cannot write {}", tmp);
+  write_text(path, text);
+}
+
+/// The paper's Table 1 columns (Adams et al. 2007, Sec. 6) and every phase.
+void print_sph_summary(const SphRunSummary& s, const std::string& name, int dim) {
+  const auto sec = [&](const char* phase) {
+    const auto it = s.seconds.find(phase);
+    return it == s.seconds.end() ? 0.0 : it->second;
+  };
+  fmt::print("\nTable 1 row, adaptive SPH ({}, {}D, {} steps to t = {:.4g} s, {} threads)\n", name, dim, s.steps,
+             s.time, s.threads);
+  fmt::print("  {:>10} {:>10} {:>8} {:>11} {:>8} {:>10} {:>9} {:>8} {:>9} {:>9}\n", "particles", "single res", "gain",
+             "neighbours", "forces", "projection", "redist.", "elfs", "resample", "total s");
+  fmt::print("  {:>10.0f} {:>10.0f} {:>7.2f}x {:>11.4f} {:>8.4f} {:>10.4f} {:>9.4f} {:>8.4f} {:>9.4f} {:>9.4f}\n",
+             s.particles, s.single_particles, s.particles > 0 ? s.single_particles / s.particles : 0.0,
+             sec("neighbours"), sec("forces"), sec("integrate") + sec("collisions"), sec("redistance"), sec("elfs"),
+             sec("resample"), sec("total"));
+  fmt::print("  single res: the level-0 particles a single-resolution run holds for the same liquid (its mass in\n"
+             "  level-0 particles; a measured single-resolution run: the same command with --regular)\n");
+  std::string levels;
+  for (std::size_t l = 0; l < s.per_level.size(); ++l) levels += fmt::format("{}{:.0f}", l ? " / " : "", s.per_level[l]);
+  fmt::print("  particles per level (mean): {}; fewest {}, most {}\n", levels, s.min_particles, s.max_particles);
+  fmt::print("  split {}, merged {}, added by sources {}; largest density error {:.3g}%\n", s.split, s.merged,
+             s.emitted, 100 * s.max_density_error);
+  fmt::print("  spacing {:.4g} m, sound speed {:.3g} m/s\n", s.spacing, s.sound_speed);
+  fmt::print("  seconds per step by phase:");
+  for (const auto& [phase, t] : s.seconds) fmt::print(" {} {:.5f}", phase, t);
+  fmt::print("\n  wall time {:.2f} s\n", s.wall);
+}
+
+void write_sph_json(const std::string& path, const SphRunSummary& s, const std::string& name, int dim) {
+  std::string phases, levels;
+  for (const auto& [phase, t] : s.seconds)
+    phases += fmt::format("{}\"{}\": {:.6g}", phases.empty() ? "" : ", ", phase, t);
+  for (std::size_t l = 0; l < s.per_level.size(); ++l) levels += fmt::format("{}{:.6g}", l ? ", " : "", s.per_level[l]);
+  write_text(path, fmt::format(
+      "{{\n  \"scene\": \"{}\", \"method\": \"sph\", \"dimension\": {}, \"steps\": {}, \"time\": {:.9g}, "
+      "\"threads\": {},\n  \"particles\": {:.6g}, \"single_particles\": {:.6g}, \"min_particles\": {}, "
+      "\"max_particles\": {},\n  \"particles_per_level\": [{}], \"split\": {}, \"merged\": {}, \"emitted\": {},\n"
+      "  \"max_density_error\": {:.6g}, \"spacing\": {:.6g}, \"sound_speed\": {:.6g}, \"wall_seconds\": {:.6g},\n"
+      "  \"seconds_per_step\": {{{}}}\n}}\n",
+      name, dim, s.steps, s.time, s.threads, s.particles, s.single_particles, s.min_particles, s.max_particles,
+      levels, s.split, s.merged, s.emitted, s.max_density_error, s.spacing, s.sound_speed, s.wall, phases));
+}
+
+template <int Dim>
+int run_sph(const Args& a, const std::string& scene_path, Scene<Dim>* loaded) {
+  RunSettings settings;
+  settings.out = a.out;
+  settings.frames = !a.no_frames;
+  settings.checkpoint_every = a.checkpoint_every;
+  settings.overrides = a.overrides;
+  settings.scene_path = scene_path;
+  std::unique_ptr<SphSceneRunner<Dim>> run;
+  if (!a.resume.empty()) {
+    run = std::make_unique<SphSceneRunner<Dim>>(SphSceneRunner<Dim>::resume(a.resume, settings));
+    echo_sph<Dim>(run->scene(), settings, true);
+    fmt::print("  continuing from step {} (t = {:.6g} s)\n", run->solver().steps(), run->solver().time());
+  } else {
+    echo_sph<Dim>(*loaded, settings, false);
+    try {
+      run = std::make_unique<SphSceneRunner<Dim>>(std::move(*loaded), settings);
+    } catch (const Error& e) {
+      throw RunFailure{fmt::format("seeding failed: {}", e.what())};
+    }
   }
-  LIQUID_VERIFY(std::rename(tmp.c_str(), path.c_str()) == 0, "cannot rename {} to {}", tmp, path);
+  Progress progress(a.quiet);
+  while (!run->done()) {
+    try {
+      run->step();
+    } catch (const Error& e) {
+      throw RunFailure{
+          fmt::format("{}{}", e.what(),
+                      a.out.empty() ? "" : fmt::format(" (files written so far in {} are complete)", a.out))};
+    }
+    progress.update<Dim>(*run, run->done());
+  }
+  const SphRunSummary s = run->summary();
+  print_sph_summary(s, run->scene().name, Dim);
+  if (!a.json.empty()) write_sph_json(a.json, s, run->scene().name, Dim);
+  if (!a.out.empty()) fmt::print("  frames: {} in {}/{}.xmf\n", run->n_frames(), a.out, run->scene().name);
+  return 0;
 }
 
 template <int Dim>
@@ -192,10 +344,12 @@ int run_scene(const Args& a, const std::string& scene_path) {
   settings.scene_path = scene_path;
   std::unique_ptr<SceneRunner<Dim>> run;
   if (!a.resume.empty()) {
+    if (checkpoint_is_sph(a.resume)) return run_sph<Dim>(a, scene_path, nullptr);
     run = std::make_unique<SceneRunner<Dim>>(SceneRunner<Dim>::resume(a.resume, settings));
   } else {
     Scene<Dim> scene = load_scene<Dim>(scene_path);
     apply_overrides<Dim>(a.overrides, scene);
+    if (scene.sph) return run_sph<Dim>(a, scene_path, &scene);
     settings.scene_path = scene_path;
     echo<Dim>(scene, settings, false);
     try {
@@ -229,7 +383,8 @@ int run_scene(const Args& a, const std::string& scene_path) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"liquid: the adaptive RBF liquid solver and its regular PIC/FLIP/APIC baselines"};
+  CLI::App app{
+      "liquid: the adaptive RBF liquid solver, its regular PIC/FLIP/APIC baselines, and adaptive SPH"};
   app.require_subcommand(1);
   auto* scenes = app.add_subcommand("scenes", "list the built-in scenes");
   Args a;
@@ -243,11 +398,14 @@ int main(int argc, char** argv) {
       ->check(CLI::PositiveNumber)
       ->excludes(steps);
   run->add_option("--method", a.overrides.method,
-                  "rbf, pic, flip or apic (pic, flip, apic run on a regular grid)")
-      ->check(CLI::IsMember({"rbf", "pic", "flip", "apic"}));
+                  "rbf, pic, flip, apic (pic, flip, apic run on a regular grid) or sph (adaptive SPH)")
+      ->check(CLI::IsMember({"rbf", "pic", "flip", "apic", "sph"}));
   run->add_option("--surface", a.overrides.surface,
-                  "air (p = 0 in the air cells) or levelset (p = 0 at the particles' level set)")
-      ->check(CLI::IsMember({"air", "levelset"}));
+                  "PIC: air (p = 0 in the air cells) or levelset (p = 0 at the particles' level set); SPH: the "
+                  "surface meshed in the frames, distance, zhu-bridson or blobby")
+      ->check(CLI::IsMember({"air", "levelset", "distance", "zhu-bridson", "blobby"}));
+  run->add_option("--spacing", a.overrides.spacing, "SPH: the level-0 particle spacing in metres")
+      ->check(CLI::PositiveNumber);
   run->add_option("--solver", a.overrides.solver, "PPE solver (instead of the scene's)")
       ->check(CLI::IsMember(linalg::solver_names()));
   run->add_option(
@@ -255,8 +413,10 @@ int main(int argc, char** argv) {
          "AMG: keep the hierarchy while the PPE's layout stays, rebuilding it once a step needs more "
          "than this many times the iterations of the step that built it; 0: rebuild every step")
       ->check(CLI::Range(0.0, 100.0));
-  auto* regular = run->add_flag("--regular", a.regular, "run on a regular grid at the finest level");
-  run->add_flag("--adaptive", a.adaptive, "run on the adaptive tree (rbf only)")->excludes(regular);
+  auto* regular = run->add_flag("--regular", a.regular,
+                                "run on a regular grid at the finest level (SPH: single resolution)");
+  run->add_flag("--adaptive", a.adaptive, "run on the adaptive tree (rbf) or with adaptive particles (sph)")
+      ->excludes(regular);
   run->add_option("--finest", a.overrides.finest, "finest level (the coarse level moves with it)")
       ->check(CLI::Range(1, 20));
   run->add_option("--json", a.json, "write the summary (Table 1 row, phases) as JSON to FILE");
@@ -289,9 +449,9 @@ int main(int argc, char** argv) {
       LIQUID_VERIFY(
           a.overrides.method.empty() && a.overrides.adaptive < 0 && a.overrides.finest < 0 &&
               a.overrides.steps < 0 && a.overrides.until < 0 && a.overrides.surface.empty() &&
-              a.overrides.solver.empty() && a.overrides.amg_reuse == -1,
+              a.overrides.solver.empty() && a.overrides.amg_reuse == -1 && a.overrides.spacing == -1,
           "liquid run --resume continues the saved run as it was: --method, --regular, --adaptive, --finest, "
-          "--surface, --solver, --amg-reuse, --steps and --until are refused with it");
+          "--spacing, --surface, --solver, --amg-reuse, --steps and --until are refused with it");
     LIQUID_VERIFY(a.checkpoint_every == 0 || !a.out.empty(),
                   "liquid run: --checkpoint-every needs an output folder (--out DIR)");
     int dim = 0;

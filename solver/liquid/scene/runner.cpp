@@ -13,34 +13,88 @@
 #include "liquid/io/point_output.hpp"
 #include "liquid/io/series.hpp"
 #include "liquid/io/tree_output.hpp"
+#include "liquid/scene/checkpoint_detail.hpp"
 
 namespace liquid {
 
 namespace {
 
-constexpr char grid_separator = '\x1e';  // between the grids of one frame in a checkpoint
-
 double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-std::string join_grids(const std::vector<std::string>& grids) {
-  std::string out;
-  for (std::size_t i = 0; i < grids.size(); ++i) out += (i ? std::string(1, grid_separator) : "") + grids[i];
-  return out;
-}
-
-std::vector<std::string> split_grids(const std::string& text) {
-  std::vector<std::string> out(1);
-  for (char ch : text)
-    if (ch == grid_separator)
-      out.emplace_back();
-    else
-      out.back() += ch;
-  return out;
-}
-
 }  // namespace
+
+namespace detail {
+
+namespace {
+constexpr char grid_separator = '\x1e';  // between the grids of one frame in a checkpoint
+}  // namespace
+
+void put_run_settings(io::ArchiveWriter& w, const RunSettings& settings, const std::string& scene_path) {
+  w.put_string("scene/path", std::filesystem::absolute(scene_path).string());
+  const SceneOverrides& o = settings.overrides;
+  w.put_string("overrides/method", o.method.empty() ? "-" : o.method);
+  w.put_scalar("overrides/adaptive", static_cast<std::int64_t>(o.adaptive));
+  w.put_scalar("overrides/finest", static_cast<std::int64_t>(o.finest));
+  w.put_scalar("overrides/steps", static_cast<std::int64_t>(o.steps));
+  w.put_scalar("overrides/until", o.until);
+  w.put_string("overrides/surface", o.surface.empty() ? "-" : o.surface);
+  w.put_scalar("overrides/spacing", o.spacing);
+  w.put_scalar("run/checkpoint_every", static_cast<std::int64_t>(settings.checkpoint_every));
+}
+
+void get_run_settings(const io::ArchiveReader& r, RunSettings& settings) {
+  settings.scene_path = r.string("scene/path");
+  SceneOverrides& o = settings.overrides;
+  o.method = r.string("overrides/method") == "-" ? "" : r.string("overrides/method");
+  o.adaptive = static_cast<int>(r.scalar_int("overrides/adaptive"));
+  o.finest = static_cast<int>(r.scalar_int("overrides/finest"));
+  o.steps = r.scalar_int("overrides/steps");
+  o.until = r.scalar_double("overrides/until");
+  o.surface = r.string("overrides/surface") == "-" ? "" : r.string("overrides/surface");
+  // Checkpoints written before SPH runs existed lack the spacing: they kept the scene's.
+  o.spacing = r.has("overrides/spacing") ? r.scalar_double("overrides/spacing") : -1;
+  if (settings.checkpoint_every == 0) settings.checkpoint_every = r.scalar_int("run/checkpoint_every");
+  LIQUID_VERIFY(std::filesystem::is_regular_file(settings.scene_path),
+                "{}: its scene file {} is gone; a checkpoint needs the scene it was made from", r.path(),
+                settings.scene_path);
+}
+
+void put_series(io::ArchiveWriter& w, const io::SeriesWriter* series) {
+  std::vector<double> times;
+  if (series)
+    for (const io::SeriesFrame& f : series->frames()) {
+      std::string text;
+      for (std::size_t i = 0; i < f.grids.size(); ++i)
+        text += (i ? std::string(1, grid_separator) : "") + f.grids[i];
+      w.put_string(fmt::format("run/series/frame_{}", times.size()), text);
+      times.push_back(f.time);
+    }
+  w.put("run/series/times", std::span<const double>(times));
+}
+
+std::vector<io::SeriesFrame> get_series(const io::ArchiveReader& r) {
+  std::vector<io::SeriesFrame> frames;
+  const std::vector<double> times = r.doubles("run/series/times");
+  for (std::size_t f = 0; f < times.size(); ++f) {
+    io::SeriesFrame frame{times[f], std::vector<std::string>(1)};
+    for (char ch : r.string(fmt::format("run/series/frame_{}", f)))
+      if (ch == grid_separator)
+        frame.grids.emplace_back();
+      else
+        frame.grids.back() += ch;
+    frames.push_back(std::move(frame));
+  }
+  return frames;
+}
+
+}  // namespace detail
+
+bool checkpoint_is_sph(const std::string& path) {
+  const io::ArchiveReader r(path);
+  return r.has("sph/time");
+}
 
 int checkpoint_dimension(const std::string& path) {
   const io::ArchiveReader r(path);
@@ -53,12 +107,44 @@ template <int Dim>
 void apply_overrides(const SceneOverrides& o, Scene<Dim>& scene) {
   PicOptions<Dim>& p = scene.pic;
   if (!o.method.empty()) {
-    p.transfer = parse_pic_transfer(o.method);
-    if (p.transfer != PicTransfer::rbf) p.adaptive = false;
+    const bool was_sph = scene.sph;
+    scene.sph = o.method == "sph";
+    if (!scene.sph) {
+      LIQUID_VERIFY(scene.grid_given, "{}: method '{}' runs on a grid, and the scene has no [grid] table",
+                    scene.path, o.method);
+      p.transfer = parse_pic_transfer(o.method);
+      if (p.transfer != PicTransfer::rbf) p.adaptive = false;
+    }
+    if (was_sph != scene.sph && !scene.output.fields_given)
+      scene.output.fields = scene.sph ? SceneOutput::sph_fields() : SceneOutput::pic_fields();
+    if (scene.sph && !was_sph) {
+      // A PIC scene run by SPH: SPH's step is bounded by the speed of sound, so the PIC step's
+      // bounds and CFL number do not carry over.
+      scene.time.cfl = 0.25;
+      scene.time.dt_max = std::min(scene.time.dt_max, 1e-3);
+      scene.time.dt_min = std::min(1e-9, scene.time.dt_max);
+    }
   }
+  const std::string wrong = field_not_written(scene.output.fields, scene.sph);
+  LIQUID_VERIFY(wrong.empty(), "{}: output.fields names '{}', which method {} does not write", scene.path,
+                wrong, scene.method());
   if (o.adaptive >= 0) p.adaptive = o.adaptive == 1;
-  if (!o.surface.empty()) p.surface = parse_pic_surface(o.surface);
+  if (!o.surface.empty()) {
+    if (scene.sph) {
+      bool found = false;
+      for (sph::SurfaceModel m :
+           {sph::SurfaceModel::distance, sph::SurfaceModel::zhu_bridson, sph::SurfaceModel::blobby})
+        if (o.surface == sph::to_string(m)) scene.sph_scene.surface = m, found = true;
+      LIQUID_VERIFY(found, "--surface {}: an SPH run meshes the 'distance', 'zhu-bridson' or 'blobby' surface",
+                    o.surface);
+    } else {
+      LIQUID_VERIFY(o.surface == "air" || o.surface == "levelset",
+                    "--surface {}: a PIC run's pressure surface is 'air' or 'levelset'", o.surface);
+      p.surface = parse_pic_surface(o.surface);
+    }
+  }
   if (!o.solver.empty()) {
+    LIQUID_VERIFY(!scene.sph, "--solver {}: an SPH run solves no pressure equation", o.solver);
     p.solver.kind = linalg::parse_solver(o.solver);
     scene.ppe_solver_given = true;
   }
@@ -69,9 +155,24 @@ void apply_overrides(const SceneOverrides& o, Scene<Dim>& scene) {
                   o.amg_reuse);
     p.solver.amg.reuse_factor = o.amg_reuse;
   }
-  LIQUID_VERIFY(!p.adaptive || p.transfer == PicTransfer::rbf,
+  LIQUID_VERIFY(scene.sph || !p.adaptive || p.transfer == PicTransfer::rbf,
                 "method '{}' runs on a regular grid only; drop --adaptive or use --method rbf",
                 to_string(p.transfer));
+  if (o.spacing != -1) {
+    LIQUID_VERIFY(scene.sph,
+                  "--spacing {}: the particle spacing is an SPH run's (--method sph); a PIC run's size is "
+                  "--finest",
+                  o.spacing);
+    LIQUID_VERIFY(std::isfinite(o.spacing) && o.spacing > 0.0, "--spacing {} must be a positive length",
+                  o.spacing);
+    scene.sph_scene.options.spacing = o.spacing;
+    scene.sph_scene.spacing_given = true;
+  }
+  if (o.finest >= 0 && scene.sph)
+    LIQUID_VERIFY(!scene.sph_scene.spacing_given,
+                  "--finest {}: this SPH run's spacing is {} (sph.spacing or --spacing); --finest sets it only "
+                  "when the scene gives none (half the finest cell)",
+                  o.finest, scene.sph_scene.options.spacing);
   if (o.finest >= 0) {
     LIQUID_VERIFY(o.finest >= 1 && o.finest <= morton::max_level<Dim>, "--finest {} is outside [1, {}]",
                   o.finest, morton::max_level<Dim>);
@@ -89,6 +190,7 @@ void apply_overrides(const SceneOverrides& o, Scene<Dim>& scene) {
     scene.time.end = o.until;
     scene.time.steps = -1;
   }
+  if (scene.sph) sph_options<Dim>(scene);  // refuses what the SPH solver cannot run
 }
 
 template <int Dim>
@@ -103,6 +205,7 @@ SceneRunner<Dim>::SceneRunner(Scene<Dim> scene, RunSettings settings)
 template <int Dim>
 SceneRunner<Dim>::SceneRunner(Scene<Dim> scene, RunSettings settings, bool seed)
     : scene_(std::move(scene)), settings_(std::move(settings)), io_(std::make_unique<Private>()) {
+  LIQUID_VERIFY(!scene_.sph, "{}: an SPH scene runs with SphSceneRunner, not the PIC runner", scene_.path);
   LIQUID_VERIFY(settings_.checkpoint_every >= 0, "checkpoint interval {} is negative",
                 settings_.checkpoint_every);
   LIQUID_VERIFY(settings_.checkpoint_every == 0 || !settings_.out.empty(),
@@ -224,17 +327,7 @@ std::string SceneRunner<Dim>::checkpoint() {
   const std::string path = stem("checkpoint", st.step) + ".h5";
   io::ArchiveWriter w(path);
   w.put_scalar("dimension", static_cast<std::int64_t>(Dim));
-  w.put_string(
-      "scene/path",
-      std::filesystem::absolute(settings_.scene_path.empty() ? scene_.path : settings_.scene_path).string());
-  const SceneOverrides& o = settings_.overrides;
-  w.put_string("overrides/method", o.method.empty() ? "-" : o.method);
-  w.put_scalar("overrides/adaptive", static_cast<std::int64_t>(o.adaptive));
-  w.put_scalar("overrides/finest", static_cast<std::int64_t>(o.finest));
-  w.put_scalar("overrides/steps", static_cast<std::int64_t>(o.steps));
-  w.put_scalar("overrides/until", o.until);
-  w.put_string("overrides/surface", o.surface.empty() ? "-" : o.surface);
-  w.put_scalar("run/checkpoint_every", static_cast<std::int64_t>(settings_.checkpoint_every));
+  detail::put_run_settings(w, settings_, settings_.scene_path.empty() ? scene_.path : settings_.scene_path);
 
   const CellGraphState<Dim>& gs = st.graph;
   w.put("pic/graph/domain_lo", std::span<const double>(gs.domain.lo.data(), Dim));
@@ -272,13 +365,7 @@ std::string SceneRunner<Dim>::checkpoint() {
   const std::vector<double> sums = {sum_fluid_, sum_cells_, sum_particles_, sum_regular_cells_,
                                     sum_regular_particles_};
   w.put("run/sums", std::span<const double>(sums));
-  std::vector<double> times;
-  if (io_->series)
-    for (const io::SeriesFrame& f : io_->series->frames()) {
-      w.put_string(fmt::format("run/series/frame_{}", times.size()), join_grids(f.grids));
-      times.push_back(f.time);
-    }
-  w.put("run/series/times", std::span<const double>(times));
+  detail::put_series(w, io_->series.get());
   w.commit();
   written_.push_back(path);
   return path;
@@ -289,18 +376,9 @@ SceneRunner<Dim> SceneRunner<Dim>::resume(const std::string& checkpoint, RunSett
   const io::ArchiveReader r(checkpoint);
   LIQUID_VERIFY(r.scalar_int("dimension") == Dim, "{}: a {}D checkpoint, not {}D", checkpoint,
                 r.scalar_int("dimension"), Dim);
-  settings.scene_path = r.string("scene/path");
-  SceneOverrides& o = settings.overrides;
-  o.method = r.string("overrides/method") == "-" ? "" : r.string("overrides/method");
-  o.adaptive = static_cast<int>(r.scalar_int("overrides/adaptive"));
-  o.finest = static_cast<int>(r.scalar_int("overrides/finest"));
-  o.steps = r.scalar_int("overrides/steps");
-  o.until = r.scalar_double("overrides/until");
-  o.surface = r.string("overrides/surface") == "-" ? "" : r.string("overrides/surface");
-  if (settings.checkpoint_every == 0) settings.checkpoint_every = r.scalar_int("run/checkpoint_every");
-  LIQUID_VERIFY(std::filesystem::is_regular_file(settings.scene_path),
-                "{}: its scene file {} is gone; a checkpoint needs the scene it was made from", checkpoint,
-                settings.scene_path);
+  LIQUID_VERIFY(!checkpoint_is_sph(checkpoint), "{}: an SPH run's checkpoint, not a PIC run's", checkpoint);
+  detail::get_run_settings(r, settings);
+  const SceneOverrides& o = settings.overrides;
   Scene<Dim> scene = load_scene<Dim>(settings.scene_path);
   apply_overrides<Dim>(o, scene);
 
@@ -353,10 +431,7 @@ SceneRunner<Dim> SceneRunner<Dim>::resume(const std::string& checkpoint, RunSett
   run.sum_fluid_ = sums[0], run.sum_cells_ = sums[1], run.sum_particles_ = sums[2];
   run.sum_regular_cells_ = sums[3], run.sum_regular_particles_ = sums[4];
   if (run.io_->series) {
-    std::vector<io::SeriesFrame> frames;
-    const std::vector<double> times = r.doubles("run/series/times");
-    for (std::size_t f = 0; f < times.size(); ++f)
-      frames.push_back({times[f], split_grids(r.string(fmt::format("run/series/frame_{}", f)))});
+    std::vector<io::SeriesFrame> frames = detail::get_series(r);
     if (!frames.empty()) run.io_->series->restore(std::move(frames));
   }
   return run;

@@ -27,18 +27,23 @@ namespace liquid {
 /// How a run differs from its scene file (the command line's overrides), kept in checkpoints so
 /// that a resumed run rebuilds the same solver.
 struct SceneOverrides {
-  std::string method;     ///< "" keeps the scene's; a method other than rbf also sets adaptive = false
+  std::string method;     ///< "" keeps the scene's; pic, flip and apic also set adaptive = false; sph
+                          ///< runs the adaptive SPH solver
   int adaptive = -1;      ///< -1 keeps the scene's; 0 regular grid; 1 adaptive tree
   int finest = -1;        ///< -1 keeps the scene's; else the finest level (the coarse level shifts with it)
   long steps = -1;        ///< -1 keeps the scene's end; else a step count
   double until = -1;      ///< < 0 keeps the scene's end; else the end time
-  std::string surface;    ///< "" keeps the scene's; else "air" or "levelset"
+  std::string surface;    ///< "" keeps the scene's; else "air" or "levelset" (PIC), or the SPH surface
+                          ///< model meshed in the frames: "distance", "zhu-bridson", "blobby"
   std::string solver;     ///< "" keeps the scene's; else a PPE solver's name (linalg::solver_names())
   double amg_reuse = -1;  ///< -1 keeps the scene's; else AmgOptions::reuse_factor (>= 0)
+  double spacing = -1;    ///< SPH: -1 keeps the scene's; else the level-0 particle spacing
 };
 
 /// 2 or 3: the dimension of the run saved in a checkpoint file.
 int checkpoint_dimension(const std::string& path);
+/// True when a checkpoint file holds an SPH run (SphSceneRunner), false for a PIC run.
+bool checkpoint_is_sph(const std::string& path);
 
 /// Applies `o` to a loaded scene (checks the result as the loader does).
 template <int Dim>

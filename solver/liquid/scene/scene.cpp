@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <numbers>
 #include <optional>
 
 #include "liquid/core/error.hpp"
@@ -293,6 +294,162 @@ std::string format_box(const Box<Dim>& b) {
                      fmt::join(b.hi.data(), b.hi.data() + Dim, ", "));
 }
 
+
+const std::vector<std::string> sph_keys = {
+    "spacing", "levels",      "resample_every", "alpha",       "beta",        "kernel",
+    "pressure", "density",    "density_diffusion", "rest_density", "sound_speed", "viscosity",
+    "search",  "surface",     "settle",         "gate_lo",     "gate_hi",     "restitution",
+    "seed",    "turn_angle",  "turn_duration",  "turn_pivot",  "turn_axis"};
+
+/// The value of `choices` whose name (to_string) is `name`.
+template <class E>
+E by_name(const std::string& name, std::initializer_list<E> choices) {
+  for (E e : choices)
+    if (name == sph::to_string(e)) return e;
+  return *choices.begin();
+}
+
+template <class E>
+std::vector<std::string> names_of(std::initializer_list<E> choices) {
+  std::vector<std::string> out;
+  for (E e : choices) out.emplace_back(sph::to_string(e));
+  return out;
+}
+
+template <int Dim>
+void read_sph(const TableReader& r, Scene<Dim>& s) {
+  SphScene<Dim>& sc = s.sph_scene;
+  sph::SphOptions<Dim>& o = sc.options;
+  sc.spacing_given = r.has("spacing");
+  if (sc.spacing_given) o.spacing = r.positive("spacing");
+  o.max_level = static_cast<int>(r.integer_in("levels", 0, 12, o.max_level));
+  o.resample_every = static_cast<int>(r.integer_in("resample_every", 1, 100000, o.resample_every));
+  o.resampling.alpha = r.positive("alpha", o.resampling.alpha);
+  o.resampling.beta = r.positive("beta", o.resampling.beta);
+  LIQUID_VERIFY(o.resampling.alpha < o.resampling.beta, "{}: alpha {} must be below beta {}", r.where("beta"),
+                o.resampling.alpha, o.resampling.beta);
+  using K = sph::KernelSet;
+  using P = sph::PressureForm;
+  using D = sph::DensityUpdate;
+  using N = sph::NeighbourSearch;
+  using S = sph::SurfaceModel;
+  const auto kernels = {K::wendland, K::spiky, K::mueller};
+  const auto forms = {P::paper, P::variational};
+  const auto updates = {D::continuity, D::summation};
+  const auto searches = {N::automatic, N::cell_list, N::kd_tree};
+  const auto surfaces = {S::distance, S::zhu_bridson, S::blobby};
+  o.fluid.kernels = by_name(r.choice("kernel", names_of(kernels), sph::to_string(o.fluid.kernels)), kernels);
+  o.fluid.pressure_form =
+      by_name(r.choice("pressure", names_of(forms), sph::to_string(o.fluid.pressure_form)), forms);
+  o.fluid.density_update =
+      by_name(r.choice("density", names_of(updates), sph::to_string(o.fluid.density_update)), updates);
+  o.fluid.density_diffusion = r.number("density_diffusion", o.fluid.density_diffusion);
+  LIQUID_VERIFY(o.fluid.density_diffusion >= 0.0 && o.fluid.density_diffusion <= 1.0, "{}: {} is outside [0, 1]",
+                r.where("density_diffusion"), o.fluid.density_diffusion);
+  o.fluid.rest_density = r.positive("rest_density", o.fluid.rest_density);
+  if (r.has("sound_speed")) sc.sound_speed = r.positive("sound_speed");
+  o.fluid.viscosity = r.number("viscosity", o.fluid.viscosity);
+  LIQUID_VERIFY(o.fluid.viscosity >= 0.0, "{}: must not be negative (found {})", r.where("viscosity"),
+                o.fluid.viscosity);
+  o.search = by_name(r.choice("search", names_of(searches), sph::to_string(o.search)), searches);
+  sc.surface = by_name(r.choice("surface", names_of(surfaces), sph::to_string(sc.surface)), surfaces);
+  sc.settle = r.number("settle", 0.0);
+  LIQUID_VERIFY(sc.settle >= 0.0, "{}: must not be negative (found {})", r.where("settle"), sc.settle);
+  LIQUID_VERIFY(r.has("gate_lo") == r.has("gate_hi"), "{}: give both gate_lo and gate_hi, or neither",
+                r.where(r.has("gate_lo") ? "gate_lo" : "gate_hi"));
+  if (r.has("gate_lo")) {
+    sc.gate = true;
+    sc.gate_box = {r.vec<Dim>("gate_lo"), r.vec<Dim>("gate_hi")};
+    for (int d = 0; d < Dim; ++d)
+      LIQUID_VERIFY(sc.gate_box.lo[d] < sc.gate_box.hi[d], "{}: hi must exceed lo on every axis (axis {})",
+                    r.where("gate_hi"), d);
+    LIQUID_VERIFY(inside<Dim>(sc.gate_box, s.pic.domain), "{}: the gate {} reaches outside the domain {}",
+                  r.where("gate_lo"), format_box<Dim>(sc.gate_box), format_box<Dim>(s.pic.domain));
+    LIQUID_VERIFY(sc.settle > 0.0, "{}: a gate holds the liquid while it settles: give sph.settle > 0",
+                  r.where("gate_lo"));
+  }
+  o.restitution = r.number("restitution", o.restitution);
+  LIQUID_VERIFY(o.restitution >= 0.0 && o.restitution <= 1.0, "{}: {} is outside [0, 1]", r.where("restitution"),
+                o.restitution);
+  o.seed = static_cast<std::uint64_t>(r.integer_in("seed", 0, std::numeric_limits<long>::max(), 1));
+  const double angle = r.number("turn_angle", 0.0);
+  LIQUID_VERIFY(std::abs(angle) <= 3600.0, "{}: {} degrees is more than ten turns", r.where("turn_angle"), angle);
+  o.rotation.angle = angle * std::numbers::pi / 180.0;
+  if (!o.rotation.active())
+    for (const char* key : {"turn_duration", "turn_pivot", "turn_axis"})
+      LIQUID_VERIFY(!r.has(key), "{}: the container does not turn without sph.turn_angle", r.where(key));
+  o.rotation.duration = r.positive("turn_duration", 1.0);
+  o.rotation.pivot = r.vec<Dim>("turn_pivot", s.pic.domain.centre());
+  if (r.has("turn_axis")) {
+    LIQUID_VERIFY(Dim == 3, "{}: a 2D container turns about z; turn_axis is for 3D scenes", r.where("turn_axis"));
+    const Vec<Dim> axis = r.vec<Dim>("turn_axis");
+    LIQUID_VERIFY(axis.norm() > 0.0, "{}: the axis must not be zero", r.where("turn_axis"));
+    for (int d = 0; d < Dim; ++d) o.rotation.axis[d] = axis[d] / axis.norm();
+  }
+}
+
+}  // namespace
+
+std::string field_not_written(const std::vector<std::string>& fields, bool sph) {
+  const std::vector<std::string> ok = sph ? SceneOutput::sph_fields() : SceneOutput::pic_fields();
+  for (const std::string& f : fields)
+    if (std::find(ok.begin(), ok.end(), f) == ok.end()) return f;
+  return "";
+}
+
+template <int Dim>
+double sph_sound_speed(const Scene<Dim>& scene) {
+  if (scene.sph_scene.sound_speed > 0.0) return scene.sph_scene.sound_speed;
+  const Vec<Dim>& g = scene.pic.gravity;
+  double height = 0.0;
+  if (g.norm() > 0.0) height = (g.cwiseAbs() / g.norm()).dot(scene.liquid_bounds.size());
+  double fastest = std::max(std::sqrt(2.0 * g.norm() * height), scene.max_initial_speed);
+  for (const PicSource<Dim>& src : scene.pic.sources) fastest = std::max(fastest, src.velocity.norm());
+  LIQUID_VERIFY(fastest > 0.0,
+                "{}: nothing in the scene moves (no gravity, no initial velocity, no inflow): give "
+                "sph.sound_speed",
+                scene.path);
+  return 10.0 * fastest;
+}
+
+template <int Dim>
+sph::SphOptions<Dim> sph_options(const Scene<Dim>& scene) {
+  sph::SphOptions<Dim> o = scene.sph_scene.options;
+  const PicOptions<Dim>& pic = scene.pic;
+  o.container = pic.domain;
+  o.obstacles.clear();
+  if (pic.solid) o.obstacles.push_back(pic.solid);
+  o.gravity = pic.gravity;
+  o.adaptive = pic.adaptive;
+  if (!scene.sph_scene.spacing_given) {
+    LIQUID_VERIFY(scene.grid_given,
+                  "{}: the SPH particles need a spacing: give sph.spacing (or a [grid] whose finest cell, "
+                  "halved, sets it)",
+                  scene.path);
+    o.spacing = 0.5 * std::ldexp(pic.domain.size().minCoeff(), -pic.fine_level);
+  }
+  const double particles = scene.liquid_bounds.volume() / std::pow(o.spacing, Dim);
+  constexpr double budget = 5e7;
+  LIQUID_VERIFY(particles <= budget,
+                "{}: the liquid at sph.spacing {} would take about {:.3g} particles, over the budget of "
+                "{:.0g}: a larger spacing (or a coarser [grid] finest) runs",
+                scene.path, o.spacing, particles, budget);
+  const double c = sph_sound_speed(scene);
+  o.fluid.stiffness = o.fluid.rest_density * c * c;
+  o.sources.clear();
+  for (std::size_t k = 0; k < pic.sources.size(); ++k) {
+    const PicSource<Dim>& p = pic.sources[k];
+    o.sources.push_back({p.region, scene.source_bounds[k], p.velocity, p.start, p.stop});
+  }
+  try {
+    o.check();
+  } catch (const Error& e) {
+    throw Error(fmt::format("{}: [sph]: {}", scene.path, e.what()));
+  }
+  return o;
+}
+
+namespace {
 }  // namespace
 
 int scene_dimension(const std::string& path) {
@@ -312,8 +469,8 @@ template <int Dim>
 Scene<Dim> load_scene(const std::string& path) {
   const toml::table doc = parse(path);
   const TableReader top(doc, path, "",
-                        {"name", "description", "domain", "grid", "solver", "time", "ppe", "output", "fluid",
-                         "solid", "source"});
+                        {"name", "description", "domain", "grid", "solver", "sph", "time", "ppe", "output",
+                         "fluid", "solid", "source"});
   Scene<Dim> s;
   s.path = path;
   s.name = top.string("name", std::filesystem::path(path).stem().string());
@@ -336,28 +493,16 @@ Scene<Dim> load_scene(const std::string& path) {
 
   static const toml::table empty;
   {
-    const toml::table* t = top.table("grid");
-    LIQUID_VERIFY(t != nullptr, "{}: missing table [grid] (at least 'finest')", path);
-    const TableReader r(*t, path, "grid", {"finest", "coarse", "max_jump", "band"});
-    o.fine_level = static_cast<int>(r.integer_in("finest", 1, morton::max_level<Dim>));
-    o.coarse_level = static_cast<int>(r.integer_in("coarse", 0, o.fine_level, std::max(0, o.fine_level - 3)));
-    if (r.has("max_jump") && (*t)["max_jump"].is_string()) {
-      r.choice("max_jump", {"unlimited"});
-      o.max_jump = unlimited_jump;
-    } else {
-      o.max_jump = static_cast<int>(r.integer_in("max_jump", 1, 4, 2));
-    }
-    o.band = static_cast<int>(r.integer_in("band", 0, 16, 2));
-  }
-  {
     const toml::table* t = top.table("solver");
     const TableReader r(t ? *t : empty, path, "solver",
                         {"method", "adaptive", "flip", "integrator", "reseed", "reseed_mode", "gravity",
                          "extrapolation", "advect_cfl", "surface", "surface_radius"});
-    o.transfer = parse_pic_transfer(r.choice("method", {"rbf", "pic", "flip", "apic"}, std::string("rbf")));
+    const std::string method = r.choice("method", {"rbf", "pic", "flip", "apic", "sph"}, std::string("rbf"));
+    s.sph = method == "sph";
+    o.transfer = parse_pic_transfer(s.sph ? "rbf" : method);
     o.adaptive = r.boolean("adaptive", o.transfer == PicTransfer::rbf);
     LIQUID_VERIFY(
-        !o.adaptive || o.transfer == PicTransfer::rbf,
+        s.sph || !o.adaptive || o.transfer == PicTransfer::rbf,
         "{}: method '{}' runs on a uniform grid: set solver.adaptive = false (adaptive trees use rbf)",
         r.where("adaptive"), to_string(o.transfer));
     o.flip = r.number("flip", 0.95);
@@ -374,6 +519,22 @@ Scene<Dim> load_scene(const std::string& path) {
     LIQUID_VERIFY(o.surface_radius < 2.0, "{}: {} finest cells is too wide (below 2)",
                   r.where("surface_radius"), o.surface_radius);
   }
+  if (top.has("grid") || !s.sph) {
+    const toml::table* t = top.table("grid");
+    LIQUID_VERIFY(t != nullptr || s.sph, "{}: missing table [grid] (at least 'finest')", path);
+    s.grid_given = t != nullptr;
+    const TableReader r(*t, path, "grid", {"finest", "coarse", "max_jump", "band"});
+    o.fine_level = static_cast<int>(r.integer_in("finest", 1, morton::max_level<Dim>));
+    o.coarse_level = static_cast<int>(r.integer_in("coarse", 0, o.fine_level, std::max(0, o.fine_level - 3)));
+    if (r.has("max_jump") && (*t)["max_jump"].is_string()) {
+      r.choice("max_jump", {"unlimited"});
+      o.max_jump = unlimited_jump;
+    } else {
+      o.max_jump = static_cast<int>(r.integer_in("max_jump", 1, 4, 2));
+    }
+    o.band = static_cast<int>(r.integer_in("band", 0, 16, 2));
+  }
+  if (const toml::table* t = top.table("sph")) read_sph<Dim>(TableReader(*t, path, "sph", sph_keys), s);
   {
     const toml::table* t = top.table("time");
     LIQUID_VERIFY(t != nullptr, "{}: missing table [time] (end or steps)", path);
@@ -382,9 +543,11 @@ Scene<Dim> load_scene(const std::string& path) {
                   r.where_table());
     if (r.has("end")) s.time.end = r.positive("end");
     if (r.has("steps")) s.time.steps = r.integer_in("steps", 1, 100000000);
-    s.time.cfl = r.positive("cfl", 1.0);
-    s.time.dt_max = r.positive("dt_max", 0.01);
-    s.time.dt_min = r.positive("dt_min", std::min(1e-5, s.time.dt_max));
+    // SPH's step is bounded by the speed of sound (AdaptiveSph::stable_dt): a lower bound on dt would
+    // override it, so its default is far below any stable step.
+    s.time.cfl = r.positive("cfl", s.sph ? 0.25 : 1.0);
+    s.time.dt_max = r.positive("dt_max", s.sph ? 1e-3 : 0.01);
+    s.time.dt_min = r.positive("dt_min", std::min(s.sph ? 1e-9 : 1e-5, s.time.dt_max));
     LIQUID_VERIFY(s.time.dt_min <= s.time.dt_max, "{}: dt_min {} exceeds dt_max {}", r.where("dt_min"),
                   s.time.dt_min, s.time.dt_max);
   }
@@ -409,11 +572,22 @@ Scene<Dim> load_scene(const std::string& path) {
   }
   {
     const toml::table* t = top.table("output");
-    const TableReader r(t ? *t : empty, path, "output", {"every", "cells", "particles", "fields"});
+    const TableReader r(t ? *t : empty, path, "output", {"every", "cells", "particles", "surface", "fields"});
     s.output.every = r.has("every") ? r.positive("every") : 0.0;
     s.output.cells = r.boolean("cells", true);
     s.output.particles = r.boolean("particles", true);
-    s.output.fields = r.strings("fields", {"pressure", "type", "velocity", "speed"}, s.output.fields);
+    s.output.surface = r.boolean("surface", true);
+    s.output.fields_given = r.has("fields");
+    std::vector<std::string> all = SceneOutput::pic_fields();
+    for (const std::string& f : SceneOutput::sph_fields())
+      if (std::find(all.begin(), all.end(), f) == all.end()) all.push_back(f);
+    s.output.fields = r.strings("fields", all, s.sph ? SceneOutput::sph_fields() : SceneOutput::pic_fields());
+    if (s.output.fields_given) {
+      const std::string wrong = field_not_written(s.output.fields, s.sph);
+      LIQUID_VERIFY(wrong.empty(), "{}: '{}' is not a field of {} (its fields: {})", r.where("fields"), wrong,
+                    s.sph ? "the SPH particles" : "the PIC cells and particles",
+                    fmt::join(s.sph ? SceneOutput::sph_fields() : SceneOutput::pic_fields(), ", "));
+    }
   }
 
   // Liquid, solids, sources.
@@ -430,7 +604,15 @@ Scene<Dim> load_scene(const std::string& path) {
     if (shape.op == "add")
       LIQUID_VERIFY(inside<Dim>(shape.bounds, o.domain), "{}: the fluid {} reaches outside the domain {}",
                     r.where("shape"), format_box<Dim>(shape.bounds), format_box<Dim>(o.domain));
-    if (r.has("velocity")) moving.emplace_back(shape.phi, r.vec<Dim>("velocity"));
+    if (shape.op == "add") {
+      if (!s.liquid) s.liquid_bounds = shape.bounds;
+      s.liquid_bounds.lo = s.liquid_bounds.lo.cwiseMin(shape.bounds.lo);
+      s.liquid_bounds.hi = s.liquid_bounds.hi.cwiseMax(shape.bounds.hi);
+    }
+    if (r.has("velocity")) {
+      moving.emplace_back(shape.phi, r.vec<Dim>("velocity"));
+      s.max_initial_speed = std::max(s.max_initial_speed, moving.back().second.norm());
+    }
     s.liquid = combine<Dim>(s.liquid, shape);
   }
   if (!moving.empty())
@@ -463,7 +645,9 @@ Scene<Dim> load_scene(const std::string& path) {
     LIQUID_VERIFY(src.start >= 0.0 && src.stop > src.start, "{}: need 0 <= start < stop (found {} and {})",
                   r.where("stop"), src.start, src.stop);
     o.sources.push_back(src);
+    s.source_bounds.push_back(shape.bounds);
   }
+  if (s.sph) sph_options<Dim>(s);  // refuses what the SPH solver cannot run, naming the key
   return s;
 }
 
@@ -505,6 +689,10 @@ std::vector<std::pair<std::string, std::string>> builtin_scenes() {
   return out;
 }
 
+template sph::SphOptions<2> sph_options<2>(const Scene<2>&);
+template sph::SphOptions<3> sph_options<3>(const Scene<3>&);
+template double sph_sound_speed<2>(const Scene<2>&);
+template double sph_sound_speed<3>(const Scene<3>&);
 template Scene<2> load_scene<2>(const std::string&);
 template Scene<3> load_scene<3>(const std::string&);
 

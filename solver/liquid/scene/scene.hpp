@@ -16,6 +16,7 @@
 #include "liquid/levelset/levelset.hpp"
 #include "liquid/linalg/solver.hpp"
 #include "liquid/pic/adaptive_pic.hpp"
+#include "liquid/sph/adaptive_sph.hpp"
 
 namespace liquid {
 
@@ -32,14 +33,36 @@ struct SceneOutput {
   double every = 0.0;     ///< simulated seconds between frames (0: the first and the last only)
   bool cells = true;      ///< the tree's leaves with pressure, type and level
   bool particles = true;  ///< the particles with velocity and speed
-  /// The fields written: cells "pressure", "type"; particles "velocity", "speed" (cell level and
-  /// id are always written).
+  bool surface = true;    ///< SPH: the particles' surface as a mesh
+  /// The fields written. PIC: cells "pressure", "type"; particles "velocity", "speed" (cell level and
+  /// id are always written). SPH, per particle: "velocity", "speed", "pressure", "density", "level",
+  /// "radius", "distance", "elfs".
   std::vector<std::string> fields{"pressure", "type", "velocity", "speed"};
+  bool fields_given = false;  ///< output.fields is in the file (else the method's defaults)
+  static std::vector<std::string> pic_fields() { return {"pressure", "type", "velocity", "speed"}; }
+  static std::vector<std::string> sph_fields() {
+    return {"velocity", "speed", "pressure", "density", "level", "radius", "distance", "elfs"};
+  }
   bool writes(const std::string& field) const {
     for (const std::string& f : fields)
       if (f == field) return true;
     return false;
   }
+};
+
+/// The adaptive SPH side of a scene (solver.method = "sph", the [sph] table). The container is the
+/// domain, the obstacles the solids, gravity and sources the scene's: sph_options() assembles them.
+template <int Dim>
+struct SphScene {
+  sph::SphOptions<Dim> options;  ///< the [sph] table's values (fluid, levels, resampling, turn, ...)
+  bool spacing_given = false;    ///< sph.spacing is in the file (else half the finest cell of [grid])
+  /// Speed of sound (m/s); 0: ten times the fastest speed the scene can reach, max(sqrt(2 |g| H),
+  /// the initial and inflow speeds), H the liquid's height along gravity. Stiffness k = rho_0 c^2.
+  double sound_speed = 0.0;
+  double settle = 0.0;                 ///< seconds the liquid settles (AdaptiveSph::relax) before t = 0
+  bool gate = false;                   ///< it settles held in gate_box (a dam's gate, gone at t = 0)
+  Box<Dim> gate_box;
+  sph::SurfaceModel surface = sph::SurfaceModel::distance;  ///< the surface meshed in the frames
 };
 
 template <int Dim>
@@ -54,7 +77,30 @@ struct Scene {
   SceneTime time;
   SceneOutput output;
   bool ppe_solver_given = false;  ///< ppe.solver is in the file (else default_ppe_solver())
+  bool grid_given = false;        ///< the file has a [grid] table (PIC methods need it)
+  bool sph = false;               ///< solver.method = "sph": the adaptive SPH solver runs it
+  SphScene<Dim> sph_scene;
+  Box<Dim> liquid_bounds;         ///< the bounding box of the [[fluid]] shapes that add liquid
+  std::vector<Box<Dim>> source_bounds;  ///< each [[source]]'s bounding box
+  double max_initial_speed = 0.0;       ///< the fastest [[fluid]] velocity given
+  /// "sph" or the PIC transfer's name.
+  std::string method() const { return sph ? "sph" : to_string(pic.transfer); }
 };
+
+/// The first of `fields` that the method does not write ("" when all are written).
+std::string field_not_written(const std::vector<std::string>& fields, bool sph);
+
+/// The SPH solver's options for a scene with solver.method = "sph": the [sph] table's, with the
+/// domain as container, the solids as one obstacle, the scene's gravity, sources and adaptivity, the
+/// spacing (given, or half the finest cell) and the stiffness rho_0 c^2 (SphScene::sound_speed).
+/// Throws liquid::Error naming the [sph] key at fault (no spacing to be had, a liquid too large for
+/// the particle budget, values SphOptions::check() refuses).
+template <int Dim>
+sph::SphOptions<Dim> sph_options(const Scene<Dim>& scene);
+/// The sound speed a scene runs with (SphScene::sound_speed, or its default; throws when nothing in
+/// the scene moves and none is given).
+template <int Dim>
+double sph_sound_speed(const Scene<Dim>& scene);
 
 /// The PPE solver of a scene that names none: for the adaptive tree's non-symmetric matrix
 /// BiCGSTAB+ILUT in 2D and BiCGSTAB+AMG in 3D; Jacobi-preconditioned CG for the regular grid's symmetric one
@@ -81,6 +127,10 @@ std::string find_scene(const std::string& name_or_path);
 /// The built-in scenes: (name, description), sorted by name.
 std::vector<std::pair<std::string, std::string>> builtin_scenes();
 
+extern template sph::SphOptions<2> sph_options<2>(const Scene<2>&);
+extern template sph::SphOptions<3> sph_options<3>(const Scene<3>&);
+extern template double sph_sound_speed<2>(const Scene<2>&);
+extern template double sph_sound_speed<3>(const Scene<3>&);
 extern template Scene<2> load_scene<2>(const std::string&);
 extern template Scene<3> load_scene<3>(const std::string&);
 

@@ -1,7 +1,11 @@
 #include "liquid/sph/adaptive_sph.hpp"
 
+#include <Eigen/Geometry>
+
 #include <algorithm>
 #include <cmath>
+#include <numbers>
+#include <sstream>
 
 #include <fmt/ranges.h>
 
@@ -9,6 +13,35 @@
 #include "liquid/sph/kernels.hpp"
 
 namespace liquid::sph {
+
+template <int Dim>
+double SphRotation<Dim>::theta(double t) const {
+  if (t >= duration) return angle;
+  return 0.5 * angle * (1.0 - std::cos(std::numbers::pi * t / duration));
+}
+
+template <int Dim>
+double SphRotation<Dim>::omega(double t) const {
+  if (t >= duration) return 0.0;
+  return 0.5 * angle * std::numbers::pi / duration * std::sin(std::numbers::pi * t / duration);
+}
+
+template <int Dim>
+double SphRotation<Dim>::omega_rate(double t) const {
+  if (t >= duration) return 0.0;
+  const double k = std::numbers::pi / duration;
+  return 0.5 * angle * k * k * std::cos(k * t);
+}
+
+template <int Dim>
+Vec<Dim> SphRotation<Dim>::turn(const Vec<Dim>& v, double a) const {
+  if constexpr (Dim == 2) {
+    const double c = std::cos(a), s = std::sin(a);
+    return Vec<2>(c * v[0] - s * v[1], s * v[0] + c * v[1]);
+  } else {
+    return Eigen::AngleAxisd(a, axis) * v;
+  }
+}
 
 template <int Dim>
 void SphOptions<Dim>::check() const {
@@ -36,6 +69,119 @@ void SphOptions<Dim>::check() const {
   LIQUID_VERIFY(restitution >= 0.0 && restitution <= 1.0, "sph: restitution must be within [0, 1], not {}",
                 restitution);
   LIQUID_VERIFY(gravity.allFinite(), "sph: gravity must be finite");
+  for (std::size_t k = 0; k < sources.size(); ++k) {
+    const SphSource<Dim>& src = sources[k];
+    LIQUID_VERIFY(static_cast<bool>(src.region) && src.bounds.valid(),
+                  "sph: source {} needs a region and bounds with lo < hi", k + 1);
+    LIQUID_VERIFY(src.velocity.allFinite(), "sph: source {}'s velocity must be finite", k + 1);
+    LIQUID_VERIFY(src.start >= 0.0 && src.stop > src.start, "sph: source {} needs 0 <= start < stop, not {} and {}",
+                  k + 1, src.start, src.stop);
+  }
+  if (rotation.active()) {
+    LIQUID_VERIFY(std::isfinite(rotation.angle) && rotation.duration > 0.0 && std::isfinite(rotation.duration),
+                  "sph: the container's turn needs a finite angle and a positive duration, not {} and {}",
+                  rotation.angle, rotation.duration);
+    LIQUID_VERIFY(rotation.pivot.allFinite(), "sph: the container's pivot must be finite");
+    LIQUID_VERIFY(std::abs(rotation.axis.norm() - 1.0) < 1e-9, "sph: the turn's axis must be a unit vector");
+  }
+}
+
+template <int Dim>
+Vec<Dim> AdaptiveSph<Dim>::gravity_at(double t) const {
+  if (!options_.rotation.active()) return options_.gravity;
+  return options_.rotation.turn(options_.gravity, -options_.rotation.theta(t));
+}
+
+template <int Dim>
+void AdaptiveSph<Dim>::add_frame_accelerations() {
+  const SphRotation<Dim>& rot = options_.rotation;
+  const double w = rot.omega(time_), dw = rot.omega_rate(time_);
+  if (w == 0.0 && dw == 0.0) return;
+  const int n = p_.size();
+#pragma omp parallel for schedule(static)
+  for (int i = 0; i < n; ++i) {
+    const Vec<Dim> r = p_.x[i] - rot.pivot;
+    if constexpr (Dim == 2) {
+      // w = w e_z: w x r = w (-r_y, r_x); w x (w x r) = -w^2 r.
+      const Vec<2> perp_r(-r[1], r[0]), perp_v(-p_.v[i][1], p_.v[i][0]);
+      p_.a[i] += -dw * perp_r - 2.0 * w * perp_v + w * w * r;
+    } else {
+      const Vec<3> wv = w * rot.axis, dwv = dw * rot.axis;
+      p_.a[i] += -dwv.cross(r) - 2.0 * wv.cross(p_.v[i]) - wv.cross(wv.cross(r));
+    }
+  }
+}
+
+template <int Dim>
+int AdaptiveSph<Dim>::apply_sources() {
+  int added = 0;
+  const double s = options_.spacing;
+  double reach = s;  // the largest spacing of any particle
+  for (int l = 0; l <= options_.max_level; ++l) reach = std::max(reach, sizes_.spacing_of<Dim>(l));
+  for (const SphSource<Dim>& src : options_.sources) {
+    if (!src.active(time_)) continue;
+    // The particles near the source, bucketed in cells of side `reach` over its bounds (one cell wider).
+    const Vec<Dim> lo = src.bounds.lo.array() - reach;
+    Eigen::Matrix<long, Dim, 1> cells;
+    for (int d = 0; d < Dim; ++d)
+      cells[d] = static_cast<long>(std::ceil((src.bounds.size()[d] + 2 * reach) / reach)) + 1;
+    const auto cell_of = [&](const Vec<Dim>& x, Eigen::Matrix<long, Dim, 1>& c) {
+      for (int d = 0; d < Dim; ++d) {
+        c[d] = static_cast<long>(std::floor((x[d] - lo[d]) / reach));
+        if (c[d] < 0 || c[d] >= cells[d]) return false;
+      }
+      return true;
+    };
+    const auto flat = [&](const Eigen::Matrix<long, Dim, 1>& c) {
+      long k = 0;
+      for (int d = Dim - 1; d >= 0; --d) k = k * cells[d] + c[d];
+      return k;
+    };
+    std::vector<std::vector<int>> bucket(static_cast<std::size_t>(cells.prod()));
+    for (int i = 0; i < p_.size(); ++i) {
+      if (src.region(p_.x[i]) < 0.0) p_.v[i] = src.velocity;
+      Eigen::Matrix<long, Dim, 1> c = Eigen::Matrix<long, Dim, 1>::Zero();
+      if (cell_of(p_.x[i], c)) bucket[flat(c)].push_back(i);
+    }
+    // The lattice over the bounds, centred as seed() centres its lattice in the container.
+    Eigen::Matrix<long, Dim, 1> n;
+    for (int d = 0; d < Dim; ++d) n[d] = std::max<long>(1, static_cast<long>(std::floor(src.bounds.size()[d] / s + 1e-9)));
+    const Vec<Dim> offset =
+        src.bounds.lo + 0.5 * (src.bounds.size() - s * (n.template cast<double>() - Vec<Dim>::Ones()));
+    Eigen::Matrix<long, Dim, 1> k = Eigen::Matrix<long, Dim, 1>::Zero();
+    while (true) {
+      const Vec<Dim> x = offset + s * k.template cast<double>();
+      if (src.region(x) < 0.0 && !in_solid(x)) {
+        bool free = true;
+        Eigen::Matrix<long, Dim, 1> c = Eigen::Matrix<long, Dim, 1>::Zero();
+        cell_of(x, c);  // inside: the grid reaches one cell past the bounds
+        Eigen::Matrix<long, Dim, 1> o = Eigen::Matrix<long, Dim, 1>::Constant(-1);
+        while (free) {
+          Eigen::Matrix<long, Dim, 1> q = c + o;
+          if ((q.array() >= 0).all() && (q.array() < cells.array()).all())
+            for (int j : bucket[flat(q)]) {
+              const double need = 0.99 * 0.5 * (s + p_.radius[j] / sizes_.h_ratio);
+              if ((p_.x[j] - x).squaredNorm() < need * need) {
+                free = false;
+                break;
+              }
+            }
+          int d = 0;
+          while (d < Dim && ++o[d] > 1) o[d] = -1, ++d;
+          if (d == Dim) break;
+        }
+        if (free) {
+          const int i = p_.add(sizes_, x, src.velocity, 0, 0.0, options_.fluid.rest_density);
+          if (cell_of(x, c)) bucket[flat(c)].push_back(i);
+          ++added;
+        }
+      }
+      int d = 0;
+      while (d < Dim && ++k[d] >= n[d]) k[d] = 0, ++d;
+      if (d == Dim) break;
+    }
+  }
+  return added;
 }
 
 template <int Dim>
@@ -179,21 +325,27 @@ SphStepReport AdaptiveSph<Dim>::advance(double dt) {
   LIQUID_VERIFY(dt > 0.0 && std::isfinite(dt), "sph: the time step must be positive and finite, not {}", dt);
   auto total = timer_.scope("total");
   const bool resampling = steps_ % options_.resample_every == 0;
+  SphStepReport report;
+  if (!options_.sources.empty()) {
+    auto t = timer_.scope("sources");
+    report.emitted = apply_sources();
+  }
   {
     auto t = timer_.scope("neighbours");
     find_neighbours_now(resampling);
   }
-  SphStepReport report;
   report.pairs = nbrs_.n_pairs();
   {
     auto t = timer_.scope("forces");
+    const Vec<Dim> gravity = gravity_at(time_);
     if (options_.fluid.density_update == DensityUpdate::summation) {
       compute_density<Dim>(p_, nbrs_, options_.fluid, &walls_);
     } else {
       compute_pressure<Dim>(p_, options_.fluid);
-      compute_density_rate<Dim>(p_, nbrs_, options_.fluid, options_.gravity, &walls_);
+      compute_density_rate<Dim>(p_, nbrs_, options_.fluid, gravity, &walls_);
     }
-    compute_accelerations<Dim>(p_, nbrs_, options_.fluid, options_.gravity, &walls_);
+    compute_accelerations<Dim>(p_, nbrs_, options_.fluid, gravity, &walls_);
+    if (options_.rotation.active()) add_frame_accelerations();
     for (int i = 0; i < p_.size(); ++i) {
       if (!std::isfinite(p_.density[i]) || !std::isfinite(p_.drho[i]) || !p_.a[i].allFinite())
         throw_not_finite(i);
@@ -263,17 +415,24 @@ void AdaptiveSph<Dim>::relax(double duration, const Box<Dim>* hold) {
   LIQUID_VERIFY(duration >= 0.0 && std::isfinite(duration), "sph: the relaxation time must be >= 0, not {}",
                 duration);
   const Box<Dim> container = options_.container;
-  // Whatever happens (a step may throw), the container comes back.
+  // The liquid settles in a still container without inflow; whatever happens (a step may throw),
+  // the container, its sources and its turn come back.
   struct Restore {
     AdaptiveSph& sim;
     const Box<Dim>& box;
-    bool active;
+    bool held;
+    std::vector<SphSource<Dim>> sources;
+    SphRotation<Dim> rotation;
     ~Restore() {
-      if (!active) return;
+      sim.options_.sources = std::move(sources);
+      sim.options_.rotation = rotation;
+      if (!held) return;
       sim.options_.container = box;
       sim.walls_ = Boundary<Dim>(box, sim.options_.obstacles);
     }
-  } restore{*this, container, hold != nullptr};
+  } restore{*this, container, hold != nullptr, std::move(options_.sources), options_.rotation};
+  options_.sources.clear();
+  options_.rotation.angle = 0.0;
   if (hold) {
     LIQUID_VERIFY(hold->valid(), "sph: the box that holds the liquid while it settles must have lo < hi");
     options_.container = *hold;
@@ -308,6 +467,46 @@ double AdaptiveSph<Dim>::stable_dt(double cfl, double max_dt) const {
   return dt;
 }
 
+template <int Dim>
+SphState<Dim> AdaptiveSph<Dim>::state() const {
+  SphState<Dim> st;
+  st.particles = p_;
+  st.time = time_;
+  st.steps = steps_;
+  std::ostringstream text;
+  text << rng_;
+  st.rng = text.str();
+  return st;
+}
+
+template <int Dim>
+void AdaptiveSph<Dim>::restore(SphState<Dim> st) {
+  const SphParticles<Dim>& q = st.particles;
+  const std::size_t n = q.x.size();
+  LIQUID_VERIFY(q.v.size() == n && q.a.size() == n && q.level.size() == n && q.mass.size() == n &&
+                    q.radius.size() == n && q.density.size() == n && q.drho.size() == n &&
+                    q.pressure.size() == n && q.distance.size() == n && q.foot.size() == n && q.elfs.size() == n,
+                "sph: the saved particle arrays differ in length");
+  for (std::size_t i = 0; i < n; ++i) {
+    LIQUID_VERIFY(q.level[i] >= 0 && q.level[i] <= options_.max_level,
+                  "sph: saved particle {} has level {}, outside 0..{}", i, int(q.level[i]), options_.max_level);
+    LIQUID_VERIFY(q.mass[i] == sizes_.mass_of(q.level[i]),
+                  "sph: saved particle {} has mass {}, not its level's {} (other fluid constants or spacing?)", i,
+                  q.mass[i], sizes_.mass_of(q.level[i]));
+  }
+  LIQUID_VERIFY(std::isfinite(st.time) && st.time >= 0.0 && st.steps >= 0, "sph: the saved clock is not valid");
+  std::istringstream text(st.rng);
+  std::mt19937_64 rng;
+  text >> rng;
+  LIQUID_VERIFY(!text.fail(), "sph: the saved random stream cannot be read");
+  p_ = std::move(st.particles);
+  time_ = st.time;
+  steps_ = st.steps;
+  rng_ = rng;
+}
+
+template struct SphRotation<2>;
+template struct SphRotation<3>;
 template struct SphOptions<2>;
 template struct SphOptions<3>;
 template class AdaptiveSph<2>;

@@ -1,6 +1,8 @@
 #pragma once
 // AdaptiveSph<Dim>: the adaptively sampled particle fluid of Adams et al. 2007. A step reads as
 // named, timed phases (PhaseTimer names):
+//   sources     (scenes with sources) particles inside an active source take its velocity; new
+//               level-0 particles fill the free points of its lattice
 //   neighbours  the symmetric neighbour lists (cell list or k-d tree, SphOptions::search; the tree
 //               is built on redistancing steps either way)
 //   forces      density, pressure, pair forces, gravity
@@ -14,7 +16,9 @@
 // compares with); the distances are still redistanced, so both carry the same surface.
 
 #include <cstdint>
+#include <limits>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "liquid/core/timer.hpp"
@@ -28,6 +32,42 @@
 #include "liquid/sph/sph_particles.hpp"
 
 namespace liquid::sph {
+
+/// An inflow. While start <= t < stop, every particle inside `region` (negative inside) moves at
+/// `velocity`, and a level-0 particle is added at each point of a lattice of the level-0 spacing over
+/// `bounds` that lies inside `region`, outside the solids, and has no particle closer than the two
+/// particles' mean spacing: a steady inflow then enters at the rest spacing.
+template <int Dim>
+struct SphSource {
+  levelset::Function<Dim> region;
+  Box<Dim> bounds;  ///< holds the region's inside
+  Vec<Dim> velocity = Vec<Dim>::Zero();
+  double start = 0.0, stop = std::numeric_limits<double>::infinity();
+  bool active(double t) const { return t >= start && t < stop; }
+};
+
+/// A container that turns (the paper's desk toy, Fig. 7) about `pivot`: by theta(t) = angle (1 -
+/// cos(pi t / duration)) / 2 until `duration`, then it rests at `angle` (radians; about the z axis in
+/// 2D, about `axis` in 3D). The simulation runs in the container's frame, where the walls and the
+/// obstacles stand still: gravity turns the other way, and the frame's fictitious accelerations are
+/// added (Euler -w' x r, Coriolis -2 w x v, centrifugal -w x (w x r), r from the pivot), so the
+/// motion is that of the turning container, not an approximation of it. world() maps a point of the
+/// container's frame to the world's.
+template <int Dim>
+struct SphRotation {
+  double angle = 0.0;     ///< radians; 0: the container stands still
+  double duration = 1.0;  ///< seconds of the turn
+  Vec<Dim> pivot = Vec<Dim>::Zero();
+  Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();  ///< 3D only (a unit vector)
+  bool active() const { return angle != 0.0; }
+  double theta(double t) const;
+  double omega(double t) const;         ///< d theta / dt
+  double omega_rate(double t) const;    ///< d^2 theta / dt^2
+  /// v turned by the angle a (about z in 2D, `axis` in 3D).
+  Vec<Dim> turn(const Vec<Dim>& v, double a) const;
+  /// A point of the container's frame at time t in the world's.
+  Vec<Dim> world(const Vec<Dim>& x, double t) const { return pivot + turn(x - pivot, theta(t)); }
+};
 
 template <int Dim>
 struct SphOptions {
@@ -53,6 +93,8 @@ struct SphOptions {
   NeighbourSearch search = NeighbourSearch::automatic;
   double restitution = 0.0;  ///< normal velocity kept (reversed) at a wall
   std::uint64_t seed = 1;    ///< the split directions' random stream
+  std::vector<SphSource<Dim>> sources;
+  SphRotation<Dim> rotation;  ///< the container's turn (none by default)
 
   /// Throws liquid::Error naming the first impossible value.
   void check() const;
@@ -69,6 +111,18 @@ struct SphStepReport {
   ResampleStats resampling;
   double max_speed = 0.0;
   double max_density_error = 0.0;  ///< max |rho_i / rho_0 - 1| over particles, at the forces
+  int emitted = 0;                 ///< particles the sources added this step
+};
+
+/// What a checkpoint keeps of an AdaptiveSph: its particles, clock and split directions' random
+/// stream (as text). The neighbour lists and the tree are rebuilt by every step, so a restored
+/// simulation continues bit for bit.
+template <int Dim>
+struct SphState {
+  SphParticles<Dim> particles;
+  double time = 0.0;
+  long steps = 0;
+  std::string rng;
 };
 
 template <int Dim>
@@ -90,7 +144,7 @@ class AdaptiveSph {
   /// otherwise starts by falling into its hydrostatic compression, and the acoustic oscillation
   /// that follows (measured in a 2D tank: kinetic energy 1 J per metre, speeds 0.1 sqrt(gH)) lasts
   /// for seconds. With `hold`, the liquid settles inside that box instead of the container (a dam's
-  /// gate, removed when relax() returns).
+  /// gate, removed when relax() returns). Sources and the container's turn are off while it settles.
   void relax(double duration, const Box<Dim>* hold = nullptr);
   /// dt by the speed of sound, the fastest particle, the largest acceleration and the viscosity:
   /// min(cfl s / (c + |v|max), 0.25 sqrt(s / |a|max), 0.125 rho_0 s^2 / mu), capped at max_dt, with
@@ -104,6 +158,8 @@ class AdaptiveSph {
   const PhaseTimer& timer() const { return timer_; }
   double time() const { return time_; }
   long steps() const { return steps_; }
+  /// Gravity in the container's frame at time t (turned against the container's turn).
+  Vec<Dim> gravity_at(double t) const;
   /// True when x is inside an obstacle or outside the container (by more than round-off).
   bool in_solid(const Vec<Dim>& x) const;
   /// The total volume the particles stand for: sum m_i / rho_0.
@@ -113,9 +169,18 @@ class AdaptiveSph {
   /// does); returns what it did. Public for the cases that resample without moving.
   SphStepReport adapt_now();
 
+  SphState<Dim> state() const;
+  /// Continues from `state` (taken from a simulation with the same options); throws liquid::Error
+  /// naming what does not fit (array sizes, a level above max_level, a bad random stream).
+  void restore(SphState<Dim> state);
+
  private:
   void find_neighbours_now(bool with_tree);
   void collide();
+  /// The sources' phase: imposed velocities, then new particles; returns how many were added.
+  int apply_sources();
+  /// Adds the turning frame's fictitious accelerations to p.a.
+  void add_frame_accelerations();
   /// The every-k-th-step phases on the current neighbour lists: redistance, and when adaptive elfs
   /// and resample (timed under those names).
   void redistance_and_resample(SphStepReport& report);
