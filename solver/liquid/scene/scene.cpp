@@ -400,11 +400,24 @@ std::string field_not_written(const std::vector<std::string>& fields, bool sph) 
 template <int Dim>
 double sph_sound_speed(const Scene<Dim>& scene) {
   if (scene.sph_scene.sound_speed > 0.0) return scene.sph_scene.sound_speed;
+  // The fastest speed the scene can reach: its fastest initial or inflow speed, plus a fall from the
+  // top of the liquid or of a source to the bottom of the domain (in a turning container, across its
+  // diagonal).
+  double start = scene.max_initial_speed;
+  for (const PicSource<Dim>& src : scene.pic.sources) start = std::max(start, src.velocity.norm());
   const Vec<Dim>& g = scene.pic.gravity;
-  double height = 0.0;
-  if (g.norm() > 0.0) height = (g.cwiseAbs() / g.norm()).dot(scene.liquid_bounds.size());
-  double fastest = std::max(std::sqrt(2.0 * g.norm() * height), scene.max_initial_speed);
-  for (const PicSource<Dim>& src : scene.pic.sources) fastest = std::max(fastest, src.velocity.norm());
+  double fall = 0.0;
+  if (scene.sph_scene.options.rotation.active()) {
+    fall = scene.pic.domain.size().norm();
+  } else if (g.norm() > 0.0) {
+    const Vec<Dim> up = -g / g.norm();
+    const auto lowest = [&](const Box<Dim>& b) { return up.dot(b.centre()) - 0.5 * up.cwiseAbs().dot(b.size()); };
+    const auto highest = [&](const Box<Dim>& b) { return up.dot(b.centre()) + 0.5 * up.cwiseAbs().dot(b.size()); };
+    double top = highest(scene.liquid_bounds);
+    for (const Box<Dim>& b : scene.source_bounds) top = std::max(top, highest(b));
+    fall = std::max(0.0, top - lowest(scene.pic.domain));
+  }
+  const double fastest = std::sqrt(start * start + 2.0 * g.norm() * fall);
   LIQUID_VERIFY(fastest > 0.0,
                 "{}: nothing in the scene moves (no gravity, no initial velocity, no inflow): give "
                 "sph.sound_speed",

@@ -56,8 +56,10 @@ template <int Dim>
 struct SphScene {
   sph::SphOptions<Dim> options;  ///< the [sph] table's values (fluid, levels, resampling, turn, ...)
   bool spacing_given = false;    ///< sph.spacing is in the file (else half the finest cell of [grid])
-  /// Speed of sound (m/s); 0: ten times the fastest speed the scene can reach, max(sqrt(2 |g| H),
-  /// the initial and inflow speeds), H the liquid's height along gravity. Stiffness k = rho_0 c^2.
+  /// Speed of sound (m/s); 0: ten times the fastest speed the scene can reach, sqrt(v0^2 + 2 |g| H)
+  /// with v0 the fastest initial or inflow speed and H the fall from the top of the liquid or of a
+  /// source to the bottom of the domain (a turning container: its diagonal). Stiffness k = rho_0 c^2;
+  /// density errors stay near (v / c)^2, about 1%.
   double sound_speed = 0.0;
   double settle = 0.0;                 ///< seconds the liquid settles (AdaptiveSph::relax) before t = 0
   bool gate = false;                   ///< it settles held in gate_box (a dam's gate, gone at t = 0)

@@ -46,9 +46,11 @@ struct SphSource {
   bool active(double t) const { return t >= start && t < stop; }
 };
 
-/// A container that turns (the paper's desk toy, Fig. 7) about `pivot`: by theta(t) = angle (1 -
-/// cos(pi t / duration)) / 2 until `duration`, then it rests at `angle` (radians; about the z axis in
-/// 2D, about `axis` in 3D). The simulation runs in the container's frame, where the walls and the
+/// A container that turns (the paper's desk toy, Fig. 7) about `pivot`: by theta(t) = angle (u -
+/// sin(2 pi u) / (2 pi)), u = t / duration, until `duration`, then it rests at `angle` (radians; about
+/// the z axis in 2D, about `axis` in 3D). The turn starts and ends with no angular velocity or
+/// acceleration: leap-frog's first kick then needs no half step (with a sudden angular acceleration
+/// at t = 0 a free particle ends a quarter turn 4e-4 off at dt = 1e-4, first order in dt). The simulation runs in the container's frame, where the walls and the
 /// obstacles stand still: gravity turns the other way, and the frame's fictitious accelerations are
 /// added (Euler -w' x r, Coriolis -2 w x v, centrifugal -w x (w x r), r from the pivot), so the
 /// motion is that of the turning container, not an approximation of it. world() maps a point of the
@@ -179,8 +181,8 @@ class AdaptiveSph {
   void collide();
   /// The sources' phase: imposed velocities, then new particles; returns how many were added.
   int apply_sources();
-  /// Adds the turning frame's fictitious accelerations to p.a.
-  void add_frame_accelerations();
+  /// Adds the turning frame's fictitious accelerations to p.a (dt: the step's, for the Coriolis term).
+  void add_frame_accelerations(double dt);
   /// The every-k-th-step phases on the current neighbour lists: redistance, and when adaptive elfs
   /// and resample (timed under those names).
   void redistance_and_resample(SphStepReport& report);

@@ -8,6 +8,7 @@
 #include "liquid/core/error.hpp"
 #include "liquid/io/archive.hpp"
 #include "liquid/scene/runner.hpp"
+#include "liquid/scene/sph_runner.hpp"
 
 namespace liquid {
 namespace {
@@ -149,6 +150,113 @@ TEST(Scene, CheckpointOfAnotherDimensionOrWithoutItsSceneIsRefused) {
   const std::string saved = run.checkpoint();
   EXPECT_EQ(checkpoint_dimension(saved), 2);
   EXPECT_THROW(SceneRunner<3>::resume(saved, RunSettings{}), Error);
+}
+
+TEST(SphScene, KeysReachTheSolverOptions) {
+  const Scene<2> s = load_scene<2>(find_scene("sph-dam-break-2d"));
+  ASSERT_TRUE(s.sph);
+  EXPECT_FALSE(s.grid_given);
+  const sph::SphOptions<2> o = sph_options<2>(s);
+  EXPECT_DOUBLE_EQ(o.spacing, 0.01);
+  EXPECT_EQ(o.max_level, 3);
+  EXPECT_TRUE(o.adaptive);
+  EXPECT_DOUBLE_EQ(s.sph_scene.settle, 0.2);
+  ASSERT_TRUE(s.sph_scene.gate);
+  EXPECT_DOUBLE_EQ(s.sph_scene.gate_box.hi[1], 0.6);
+  // Sound speed: 10 sqrt(2 g 0.6), the column's fall to the floor; stiffness rho_0 c^2.
+  EXPECT_NEAR(sph_sound_speed<2>(s), 10.0 * std::sqrt(2.0 * 9.81 * 0.6), 1e-9);
+  EXPECT_NEAR(o.fluid.stiffness, 1000.0 * 100.0 * 2.0 * 9.81 * 0.6, 1e-6);
+  // SPH's default step bounds: CFL 0.25 of the sound speed, no floor that would override it.
+  EXPECT_DOUBLE_EQ(s.time.cfl, 0.25);
+  EXPECT_LE(s.time.dt_min, 1e-9);
+  EXPECT_EQ(s.output.fields, SceneOutput::sph_fields());
+
+  const Scene<2> toy = load_scene<2>(find_scene("sph-desk-toy-2d"));
+  const sph::SphOptions<2> t = sph_options<2>(toy);
+  EXPECT_NEAR(t.rotation.angle, 3.141592653589793, 1e-12);
+  EXPECT_DOUBLE_EQ(t.rotation.duration, 0.6);
+  EXPECT_EQ(t.rotation.pivot, Vec<2>(0.3, 0.5));  // the domain's centre
+  EXPECT_EQ(t.obstacles.size(), 1u);              // the solids, united
+  const Scene<2> pour = load_scene<2>(find_scene("sph-pour-2d"));
+  const sph::SphOptions<2> p = sph_options<2>(pour);
+  ASSERT_EQ(p.sources.size(), 1u);
+  EXPECT_DOUBLE_EQ(p.sources[0].stop, 1.0);
+  EXPECT_DOUBLE_EQ(p.sources[0].bounds.lo[0], 0.05);
+}
+
+TEST(SphScene, APicSceneRunsBySphAtHalfItsFinestCell) {
+  Scene<2> s = load_scene<2>(find_scene("dam-break-2d"));
+  SceneOverrides o;
+  o.method = "sph";
+  o.finest = 5;
+  apply_overrides<2>(o, s);
+  ASSERT_TRUE(s.sph);
+  EXPECT_DOUBLE_EQ(sph_options<2>(s).spacing, 0.5 / 32.0);
+  EXPECT_EQ(s.output.fields, SceneOutput::sph_fields());
+  EXPECT_DOUBLE_EQ(s.time.cfl, 0.25);
+  // An SPH scene's given spacing is not moved by --finest, and --spacing is an SPH option only.
+  Scene<2> d = load_scene<2>(find_scene("sph-dam-break-2d"));
+  SceneOverrides finest;
+  finest.finest = 6;
+  EXPECT_THROW(apply_overrides<2>(finest, d), Error);
+  SceneOverrides spacing;
+  spacing.spacing = 0.02;
+  Scene<2> pic = load_scene<2>(find_scene("pool-2d"));
+  EXPECT_THROW(apply_overrides<2>(spacing, pic), Error);
+  apply_overrides<2>(spacing, d);
+  EXPECT_DOUBLE_EQ(sph_options<2>(d).spacing, 0.02);
+  // An SPH scene without [grid] cannot run a PIC method.
+  SceneOverrides rbf;
+  rbf.method = "rbf";
+  Scene<2> d2 = load_scene<2>(find_scene("sph-dam-break-2d"));
+  EXPECT_THROW(apply_overrides<2>(rbf, d2), Error);
+}
+
+TEST(SphScene, ResumedRunEndsBitForBitLikeTheUninterruptedOne) {
+  // The pour: sources add particles, resampling splits and merges (random directions).
+  const std::string path = find_scene("sph-pour-2d");
+  SceneOverrides o;
+  o.spacing = 0.02;
+  o.steps = 40;
+  RunSettings settings;
+  settings.out = temp_folder("sph-pour-a");
+  settings.checkpoint_every = 20;
+  settings.overrides = o;
+  settings.scene_path = path;
+  Scene<2> scene = load_scene<2>(path);
+  apply_overrides<2>(o, scene);
+  SphSceneRunner<2> full(scene, settings);
+  while (!full.done()) full.step();
+  const SphRunSummary fs = full.summary();
+  EXPECT_GT(fs.emitted, 0);
+  EXPECT_GT(fs.split + fs.merged, 0);
+  const std::string half = (std::filesystem::path(settings.out) / "sph-pour-2d_checkpoint_000020.h5").string();
+  ASSERT_TRUE(std::filesystem::exists(half));
+  EXPECT_TRUE(checkpoint_is_sph(half));
+
+  RunSettings again;
+  again.out = temp_folder("sph-pour-b");
+  SphSceneRunner<2> resumed = SphSceneRunner<2>::resume(half, again);
+  EXPECT_EQ(resumed.solver().steps(), 20);
+  while (!resumed.done()) resumed.step();
+  const auto& a = full.solver().particles();
+  const auto& b = resumed.solver().particles();
+  ASSERT_EQ(a.size(), b.size());
+  for (int i = 0; i < a.size(); ++i) {
+    ASSERT_EQ(a.x[i], b.x[i]) << "particle " << i;
+    ASSERT_EQ(a.v[i], b.v[i]) << "particle " << i;
+    ASSERT_EQ(a.density[i], b.density[i]) << "particle " << i;
+    ASSERT_EQ(a.level[i], b.level[i]) << "particle " << i;
+  }
+  EXPECT_EQ(full.solver().time(), resumed.solver().time());
+  const SphRunSummary rs = resumed.summary();
+  EXPECT_EQ(fs.steps, rs.steps);
+  EXPECT_EQ(fs.particles, rs.particles);
+  EXPECT_EQ(fs.split, rs.split);
+  EXPECT_EQ(full.n_frames(), resumed.n_frames());
+  // A PIC runner refuses the SPH checkpoint and the SPH runner a PIC scene.
+  EXPECT_THROW(SceneRunner<2>::resume(half, again), Error);
+  EXPECT_THROW(SphSceneRunner<2>(load_scene<2>(find_scene("pool-2d")), RunSettings{}), Error);
 }
 
 }  // namespace
