@@ -42,6 +42,28 @@ struct RunFailure {
   std::string message;
 };
 
+/// The last lines of the echo: when the run ends, what it writes, the threads.
+void echo_time_and_output(const SceneTime& time, const SceneOutput& output, const RunSettings& settings,
+                          const char* cfl_note) {
+  if (time.steps >= 0)
+    fmt::print("  time        {} steps", time.steps);
+  else
+    fmt::print("  time        to t = {} s", time.end);
+  fmt::print(", CFL {}{}, dt in [{:.2g}, {:.2g}] s\n", time.cfl, cfl_note, time.dt_min, time.dt_max);
+  if (settings.out.empty())
+    fmt::print("  output      none (no --out)\n");
+  else
+    fmt::print("  output      {}: {}{}\n", settings.out,
+               settings.frames ? (output.every > 0 ? fmt::format("a frame every {} s", output.every)
+                                                   : std::string("first and last frame"))
+                               : std::string("no frames"),
+               settings.checkpoint_every > 0
+                   ? fmt::format(", a checkpoint every {} steps", settings.checkpoint_every)
+                   : "");
+  fmt::print("  threads     {}\n", omp_get_max_threads());
+  std::fflush(stdout);
+}
+
 template <int Dim>
 void echo(const Scene<Dim>& s, const RunSettings& settings, bool resumed) {
   const PicOptions<Dim>& o = s.pic;
@@ -75,23 +97,7 @@ void echo(const Scene<Dim>& s, const RunSettings& settings, bool resumed) {
   fmt::print("  gravity     ({}); solids {}; sources {}\n",
              fmt::join(o.gravity.data(), o.gravity.data() + Dim, ", "), o.solid ? "yes" : "none",
              o.sources.size());
-  if (s.time.steps >= 0)
-    fmt::print("  time        {} steps", s.time.steps);
-  else
-    fmt::print("  time        to t = {} s", s.time.end);
-  fmt::print(", CFL {}, dt in [{:.2g}, {:.2g}] s\n", s.time.cfl, s.time.dt_min, s.time.dt_max);
-  if (settings.out.empty())
-    fmt::print("  output      none (no --out)\n");
-  else
-    fmt::print("  output      {}: {}{}\n", settings.out,
-               settings.frames ? (s.output.every > 0 ? fmt::format("a frame every {} s", s.output.every)
-                                                     : std::string("first and last frame"))
-                               : std::string("no frames"),
-               settings.checkpoint_every > 0
-                   ? fmt::format(", a checkpoint every {} steps", settings.checkpoint_every)
-                   : "");
-  fmt::print("  threads     {}\n", omp_get_max_threads());
-  std::fflush(stdout);
+  echo_time_and_output(s.time, s.output, settings, "");
 }
 
 template <int Dim>
@@ -100,42 +106,29 @@ void echo_sph(const Scene<Dim>& s, const RunSettings& settings, bool resumed) {
   const SphScene<Dim>& sc = s.sph_scene;
   fmt::print("liquid run: scene {} ({}D, SPH) from {}{}\n", s.name, Dim, s.path, resumed ? " (resumed)" : "");
   if (!s.description.empty()) fmt::print("  {}\n", s.description);
-  fmt::print("  container   [{}] to [{}]\n", fmt::join(o.container.lo.data(), o.container.lo.data() + Dim, ", "),
+  fmt::print("  container   [{}] to [{}]\n",
+             fmt::join(o.container.lo.data(), o.container.lo.data() + Dim, ", "),
              fmt::join(o.container.hi.data(), o.container.hi.data() + Dim, ", "));
   fmt::print("  particles   spacing {:.4g} m (support radius {:.4g}), {}\n", o.spacing, o.h_ratio * o.spacing,
              o.adaptive ? fmt::format("adaptive, levels 0-{} (alpha {}, beta {}), resampled every {} steps",
                                       o.max_level, o.resampling.alpha, o.resampling.beta, o.resample_every)
                         : std::string("single resolution (level 0 only)"));
-  fmt::print("  fluid       rho_0 {} kg/m^{}, sound speed {:.3g} m/s{}, viscosity {} Pa s\n", o.fluid.rest_density, Dim,
-             sph_sound_speed<Dim>(s), sc.sound_speed > 0 ? "" : " (10x the fastest expected speed)",
-             o.fluid.viscosity);
+  fmt::print("  fluid       rho_0 {} kg/m^{}, sound speed {:.3g} m/s{}, viscosity {} Pa s\n",
+             o.fluid.rest_density, Dim, sph_sound_speed<Dim>(s),
+             sc.sound_speed > 0 ? "" : " (10x the fastest expected speed)", o.fluid.viscosity);
   fmt::print("  model       kernels {}, density {}, pressure {}, neighbours {}, surface {}\n",
              sph::to_string(o.fluid.kernels), sph::to_string(o.fluid.density_update),
              sph::to_string(o.fluid.pressure_form), sph::to_string(o.search), sph::to_string(sc.surface));
-  fmt::print("  gravity     ({}); solids {}; sources {}{}\n", fmt::join(o.gravity.data(), o.gravity.data() + Dim, ", "),
-             o.obstacles.empty() ? "none" : "yes", o.sources.size(),
-             o.rotation.active() ? fmt::format("; the container turns {:.4g} degrees in {} s",
-                                               o.rotation.angle * 180.0 / 3.141592653589793, o.rotation.duration)
-                                 : "");
+  fmt::print("  gravity     ({}); solids {}; sources {}{}\n",
+             fmt::join(o.gravity.data(), o.gravity.data() + Dim, ", "), o.obstacles.empty() ? "none" : "yes",
+             o.sources.size(),
+             o.rotation.active()
+                 ? fmt::format("; the container turns {:.4g} degrees in {} s",
+                               o.rotation.angle * 180.0 / 3.141592653589793, o.rotation.duration)
+                 : "");
   if (sc.settle > 0)
     fmt::print("  settle      {} s before t = 0{}\n", sc.settle, sc.gate ? ", held behind the gate" : "");
-  if (s.time.steps >= 0)
-    fmt::print("  time        {} steps", s.time.steps);
-  else
-    fmt::print("  time        to t = {} s", s.time.end);
-  fmt::print(", CFL {} (of the sound speed), dt in [{:.2g}, {:.2g}] s\n", s.time.cfl, s.time.dt_min, s.time.dt_max);
-  if (settings.out.empty())
-    fmt::print("  output      none (no --out)\n");
-  else
-    fmt::print("  output      {}: {}{}\n", settings.out,
-               settings.frames ? (s.output.every > 0 ? fmt::format("a frame every {} s", s.output.every)
-                                                     : std::string("first and last frame"))
-                               : std::string("no frames"),
-               settings.checkpoint_every > 0
-                   ? fmt::format(", a checkpoint every {} steps", settings.checkpoint_every)
-                   : "");
-  fmt::print("  threads     {}\n", omp_get_max_threads());
-  std::fflush(stdout);
+  echo_time_and_output(s.time, s.output, settings, " (of the sound speed)");
 }
 
 /// One line of progress: a bar on a terminal (rewritten in place), plain lines otherwise.
@@ -158,10 +151,11 @@ class Progress {
     const sph::AdaptiveSph<Dim>& sim = run.solver();
     const sph::SphStepReport& r = run.last();
     std::string levels;
-    for (std::size_t l = 0; l < r.per_level.size(); ++l) levels += fmt::format("{}{}", l ? "/" : "", r.per_level[l]);
+    for (std::size_t l = 0; l < r.per_level.size(); ++l)
+      levels += fmt::format("{}{}", l ? "/" : "", r.per_level[l]);
     show(fraction(s, sim.steps(), sim.time()),
-         fmt::format("t = {:.4f} s  step {}  particles {} (levels {})  {:.4f} s/step", sim.time(), sim.steps(),
-                     r.particles, levels, per_step(sim.timer())),
+         fmt::format("t = {:.4f} s  step {}  particles {} (levels {})  {:.4f} s/step", sim.time(),
+                     sim.steps(), r.particles, levels, per_step(sim.timer())),
          last);
   }
 
@@ -173,7 +167,8 @@ class Progress {
   static double per_step(const PhaseTimer& timer) {
     const auto& phases = timer.entries();
     const auto total = phases.find("total");
-    return total != phases.end() && total->second.calls > 0 ? total->second.seconds / total->second.calls : 0.0;
+    return total != phases.end() && total->second.calls > 0 ? total->second.seconds / total->second.calls
+                                                            : 0.0;
   }
   void show(double f, const std::string& text, bool last) {
     if (quiet_) return;
@@ -259,19 +254,23 @@ void print_sph_summary(const SphRunSummary& s, const std::string& name, int dim)
     const auto it = s.seconds.find(phase);
     return it == s.seconds.end() ? 0.0 : it->second;
   };
-  fmt::print("\nTable 1 row, adaptive SPH ({}, {}D, {} steps to t = {:.4g} s, {} threads)\n", name, dim, s.steps,
-             s.time, s.threads);
-  fmt::print("  {:>10} {:>10} {:>8} {:>11} {:>8} {:>10} {:>9} {:>8} {:>9} {:>9}\n", "particles", "single res", "gain",
-             "neighbours", "forces", "projection", "redist.", "elfs", "resample", "total s");
-  fmt::print("  {:>10.0f} {:>10.0f} {:>7.2f}x {:>11.4f} {:>8.4f} {:>10.4f} {:>9.4f} {:>8.4f} {:>9.4f} {:>9.4f}\n",
-             s.particles, s.single_particles, s.particles > 0 ? s.single_particles / s.particles : 0.0,
-             sec("neighbours"), sec("forces"), sec("integrate") + sec("collisions"), sec("redistance"), sec("elfs"),
-             sec("resample"), sec("total"));
-  fmt::print("  single res: the level-0 particles a single-resolution run holds for the same liquid (its mass in\n"
-             "  level-0 particles; a measured single-resolution run: the same command with --regular)\n");
+  fmt::print("\nTable 1 row, adaptive SPH ({}, {}D, {} steps to t = {:.4g} s, {} threads)\n", name, dim,
+             s.steps, s.time, s.threads);
+  fmt::print("  {:>10} {:>10} {:>8} {:>11} {:>8} {:>10} {:>9} {:>8} {:>9} {:>9}\n", "particles", "single res",
+             "gain", "neighbours", "forces", "projection", "redist.", "elfs", "resample", "total s");
+  fmt::print(
+      "  {:>10.0f} {:>10.0f} {:>7.2f}x {:>11.4f} {:>8.4f} {:>10.4f} {:>9.4f} {:>8.4f} {:>9.4f} {:>9.4f}\n",
+      s.particles, s.single_particles, s.particles > 0 ? s.single_particles / s.particles : 0.0,
+      sec("neighbours"), sec("forces"), sec("integrate") + sec("collisions"), sec("redistance"), sec("elfs"),
+      sec("resample"), sec("total"));
+  fmt::print(
+      "  single res: the level-0 particles a single-resolution run holds for the same liquid (its mass in\n"
+      "  level-0 particles; a measured single-resolution run: the same command with --regular)\n");
   std::string levels;
-  for (std::size_t l = 0; l < s.per_level.size(); ++l) levels += fmt::format("{}{:.0f}", l ? " / " : "", s.per_level[l]);
-  fmt::print("  particles per level (mean): {}; fewest {}, most {}\n", levels, s.min_particles, s.max_particles);
+  for (std::size_t l = 0; l < s.per_level.size(); ++l)
+    levels += fmt::format("{}{:.0f}", l ? " / " : "", s.per_level[l]);
+  fmt::print("  particles per level (mean): {}; fewest {}, most {}\n", levels, s.min_particles,
+             s.max_particles);
   fmt::print("  split {}, merged {}, added by sources {}; largest density error {:.3g}%\n", s.split, s.merged,
              s.emitted, 100 * s.max_density_error);
   fmt::print("  spacing {:.4g} m, sound speed {:.3g} m/s\n", s.spacing, s.sound_speed);
@@ -284,25 +283,53 @@ void write_sph_json(const std::string& path, const SphRunSummary& s, const std::
   std::string phases, levels;
   for (const auto& [phase, t] : s.seconds)
     phases += fmt::format("{}\"{}\": {:.6g}", phases.empty() ? "" : ", ", phase, t);
-  for (std::size_t l = 0; l < s.per_level.size(); ++l) levels += fmt::format("{}{:.6g}", l ? ", " : "", s.per_level[l]);
-  write_text(path, fmt::format(
-      "{{\n  \"scene\": \"{}\", \"method\": \"sph\", \"dimension\": {}, \"steps\": {}, \"time\": {:.9g}, "
-      "\"threads\": {},\n  \"particles\": {:.6g}, \"single_particles\": {:.6g}, \"min_particles\": {}, "
-      "\"max_particles\": {},\n  \"particles_per_level\": [{}], \"split\": {}, \"merged\": {}, \"emitted\": {},\n"
-      "  \"max_density_error\": {:.6g}, \"spacing\": {:.6g}, \"sound_speed\": {:.6g}, \"wall_seconds\": {:.6g},\n"
-      "  \"seconds_per_step\": {{{}}}\n}}\n",
-      name, dim, s.steps, s.time, s.threads, s.particles, s.single_particles, s.min_particles, s.max_particles,
-      levels, s.split, s.merged, s.emitted, s.max_density_error, s.spacing, s.sound_speed, s.wall, phases));
+  for (std::size_t l = 0; l < s.per_level.size(); ++l)
+    levels += fmt::format("{}{:.6g}", l ? ", " : "", s.per_level[l]);
+  write_text(
+      path,
+      fmt::format(
+          "{{\n  \"scene\": \"{}\", \"method\": \"sph\", \"dimension\": {}, \"steps\": {}, \"time\": {:.9g}, "
+          "\"threads\": {},\n  \"particles\": {:.6g}, \"single_particles\": {:.6g}, \"min_particles\": {}, "
+          "\"max_particles\": {},\n  \"particles_per_level\": [{}], \"split\": {}, \"merged\": {}, "
+          "\"emitted\": {},\n"
+          "  \"max_density_error\": {:.6g}, \"spacing\": {:.6g}, \"sound_speed\": {:.6g}, \"wall_seconds\": "
+          "{:.6g},\n"
+          "  \"seconds_per_step\": {{{}}}\n}}\n",
+          name, dim, s.steps, s.time, s.threads, s.particles, s.single_particles, s.min_particles,
+          s.max_particles, levels, s.split, s.merged, s.emitted, s.max_density_error, s.spacing,
+          s.sound_speed, s.wall, phases));
 }
 
-template <int Dim>
-int run_sph(const Args& a, const std::string& scene_path, Scene<Dim>* loaded) {
+RunSettings settings_of(const Args& a, const std::string& scene_path) {
   RunSettings settings;
   settings.out = a.out;
   settings.frames = !a.no_frames;
   settings.checkpoint_every = a.checkpoint_every;
   settings.overrides = a.overrides;
   settings.scene_path = scene_path;
+  return settings;
+}
+
+/// Steps a run (SceneRunner or SphSceneRunner) to its end with a progress line; an error while
+/// stepping is a RunFailure (exit 1) that says the files written so far are complete.
+template <class Runner>
+void run_to_end(Runner& run, const Args& a) {
+  Progress progress(a.quiet);
+  while (!run.done()) {
+    try {
+      run.step();
+    } catch (const Error& e) {
+      throw RunFailure{
+          fmt::format("{}{}", e.what(),
+                      a.out.empty() ? "" : fmt::format(" (files written so far in {} are complete)", a.out))};
+    }
+    progress.update(run, run.done());
+  }
+}
+
+template <int Dim>
+int run_sph(const Args& a, const std::string& scene_path, Scene<Dim>* loaded) {
+  const RunSettings settings = settings_of(a, scene_path);
   std::unique_ptr<SphSceneRunner<Dim>> run;
   if (!a.resume.empty()) {
     run = std::make_unique<SphSceneRunner<Dim>>(SphSceneRunner<Dim>::resume(a.resume, settings));
@@ -316,17 +343,7 @@ int run_sph(const Args& a, const std::string& scene_path, Scene<Dim>* loaded) {
       throw RunFailure{fmt::format("seeding failed: {}", e.what())};
     }
   }
-  Progress progress(a.quiet);
-  while (!run->done()) {
-    try {
-      run->step();
-    } catch (const Error& e) {
-      throw RunFailure{
-          fmt::format("{}{}", e.what(),
-                      a.out.empty() ? "" : fmt::format(" (files written so far in {} are complete)", a.out))};
-    }
-    progress.update<Dim>(*run, run->done());
-  }
+  run_to_end(*run, a);
   const SphRunSummary s = run->summary();
   print_sph_summary(s, run->scene().name, Dim);
   if (!a.json.empty()) write_sph_json(a.json, s, run->scene().name, Dim);
@@ -336,12 +353,7 @@ int run_sph(const Args& a, const std::string& scene_path, Scene<Dim>* loaded) {
 
 template <int Dim>
 int run_scene(const Args& a, const std::string& scene_path) {
-  RunSettings settings;
-  settings.out = a.out;
-  settings.frames = !a.no_frames;
-  settings.checkpoint_every = a.checkpoint_every;
-  settings.overrides = a.overrides;
-  settings.scene_path = scene_path;
+  const RunSettings settings = settings_of(a, scene_path);
   std::unique_ptr<SceneRunner<Dim>> run;
   if (!a.resume.empty()) {
     if (checkpoint_is_sph(a.resume)) return run_sph<Dim>(a, scene_path, nullptr);
@@ -350,7 +362,6 @@ int run_scene(const Args& a, const std::string& scene_path) {
     Scene<Dim> scene = load_scene<Dim>(scene_path);
     apply_overrides<Dim>(a.overrides, scene);
     if (scene.sph) return run_sph<Dim>(a, scene_path, &scene);
-    settings.scene_path = scene_path;
     echo<Dim>(scene, settings, false);
     try {
       run = std::make_unique<SceneRunner<Dim>>(std::move(scene), settings);
@@ -362,17 +373,7 @@ int run_scene(const Args& a, const std::string& scene_path) {
     echo<Dim>(run->scene(), settings, true);
     fmt::print("  continuing from step {} (t = {:.6g} s)\n", run->solver().step(), run->solver().time());
   }
-  Progress progress(a.quiet);
-  while (!run->done()) {
-    try {
-      run->step();
-    } catch (const Error& e) {
-      throw RunFailure{
-          fmt::format("{}{}", e.what(),
-                      a.out.empty() ? "" : fmt::format(" (files written so far in {} are complete)", a.out))};
-    }
-    progress.update<Dim>(*run, run->done());
-  }
+  run_to_end(*run, a);
   const RunSummary s = run->summary();
   print_summary(s, run->scene().name, Dim);
   if (!a.json.empty()) write_json(a.json, s, run->scene().name, Dim);
@@ -400,9 +401,10 @@ int main(int argc, char** argv) {
   run->add_option("--method", a.overrides.method,
                   "rbf, pic, flip, apic (pic, flip, apic run on a regular grid) or sph (adaptive SPH)")
       ->check(CLI::IsMember({"rbf", "pic", "flip", "apic", "sph"}));
-  run->add_option("--surface", a.overrides.surface,
-                  "PIC: air (p = 0 in the air cells) or levelset (p = 0 at the particles' level set); SPH: the "
-                  "surface meshed in the frames, distance, zhu-bridson or blobby")
+  run->add_option(
+         "--surface", a.overrides.surface,
+         "PIC: air (p = 0 in the air cells) or levelset (p = 0 at the particles' level set); SPH: the "
+         "surface meshed in the frames, distance, zhu-bridson or blobby")
       ->check(CLI::IsMember({"air", "levelset", "distance", "zhu-bridson", "blobby"}));
   run->add_option("--spacing", a.overrides.spacing, "SPH: the level-0 particle spacing in metres")
       ->check(CLI::PositiveNumber);

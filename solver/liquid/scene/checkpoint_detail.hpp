@@ -1,6 +1,7 @@
 #pragma once
-// What the PIC and the SPH runners' checkpoints share: the command line's overrides, the run's
-// settings and the frames of the time series written so far.
+// What the PIC and the SPH runners share: their clock (the step size, the end, the frame
+// cadence), their file names, and in checkpoints the command line's overrides, the run's settings
+// and the frames of the time series written so far.
 
 #include <string>
 #include <vector>
@@ -10,6 +11,18 @@
 #include "liquid/scene/runner.hpp"
 
 namespace liquid::detail {
+
+/// The next step: the solver's stable step clamped to [dt_min, dt_max], landing on the end time (no
+/// sliver step after it) when the run goes by time.
+double next_step(const SceneTime& time, double stable, double now);
+/// Whether a run at (step, now) has reached its end.
+bool run_done(const SceneTime& time, long step, double now);
+/// Whether a frame is due after a step that reached `now` (next_frame: from next_frame_time()).
+bool frame_due(const SceneOutput& output, double now, double next_frame);
+/// When the frame after one written at `now` is due (infinity without output.every).
+double next_frame_time(const SceneOutput& output, double now);
+/// OUT/NAME_WHAT_IIIIII
+std::string file_stem(const std::string& out, const std::string& name, const char* what, long index);
 
 /// Writes the scene path, the overrides and the checkpoint interval under scene/, overrides/, run/.
 void put_run_settings(io::ArchiveWriter& w, const RunSettings& settings, const std::string& scene_path);

@@ -27,6 +27,33 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
 
 namespace detail {
 
+double next_step(const SceneTime& time, double stable, double now) {
+  double dt = std::clamp(stable, time.dt_min, time.dt_max);
+  if (time.steps < 0) {
+    const double left = time.end - now;
+    if (dt > left || left - dt < 1e-3 * dt) dt = left;  // land on the end time, no sliver step after
+  }
+  return dt;
+}
+
+bool run_done(const SceneTime& time, long step, double now) {
+  if (time.steps >= 0) return step >= time.steps;
+  return now >= time.end * (1 - 1e-12);
+}
+
+bool frame_due(const SceneOutput& output, double now, double next_frame) {
+  return output.every > 0 && now >= next_frame - 1e-9 * output.every;
+}
+
+double next_frame_time(const SceneOutput& output, double now) {
+  return output.every > 0 ? (std::floor(now / output.every + 1e-9) + 1) * output.every
+                          : std::numeric_limits<double>::infinity();
+}
+
+std::string file_stem(const std::string& out, const std::string& name, const char* what, long index) {
+  return (std::filesystem::path(out) / fmt::format("{}_{}_{:06d}", name, what, index)).string();
+}
+
 namespace {
 constexpr char grid_separator = '\x1e';  // between the grids of one frame in a checkpoint
 }  // namespace
@@ -135,7 +162,8 @@ void apply_overrides(const SceneOverrides& o, Scene<Dim>& scene) {
       for (sph::SurfaceModel m :
            {sph::SurfaceModel::distance, sph::SurfaceModel::zhu_bridson, sph::SurfaceModel::blobby})
         if (o.surface == sph::to_string(m)) scene.sph_scene.surface = m, found = true;
-      LIQUID_VERIFY(found, "--surface {}: an SPH run meshes the 'distance', 'zhu-bridson' or 'blobby' surface",
+      LIQUID_VERIFY(found,
+                    "--surface {}: an SPH run meshes the 'distance', 'zhu-bridson' or 'blobby' surface",
                     o.surface);
     } else {
       LIQUID_VERIFY(o.surface == "air" || o.surface == "levelset",
@@ -169,10 +197,11 @@ void apply_overrides(const SceneOverrides& o, Scene<Dim>& scene) {
     scene.sph_scene.spacing_given = true;
   }
   if (o.finest >= 0 && scene.sph)
-    LIQUID_VERIFY(!scene.sph_scene.spacing_given,
-                  "--finest {}: this SPH run's spacing is {} (sph.spacing or --spacing); --finest sets it only "
-                  "when the scene gives none (half the finest cell)",
-                  o.finest, scene.sph_scene.options.spacing);
+    LIQUID_VERIFY(
+        !scene.sph_scene.spacing_given,
+        "--finest {}: this SPH run's spacing is {} (sph.spacing or --spacing); --finest sets it only "
+        "when the scene gives none (half the finest cell)",
+        o.finest, scene.sph_scene.options.spacing);
   if (o.finest >= 0) {
     LIQUID_VERIFY(o.finest >= 1 && o.finest <= morton::max_level<Dim>, "--finest {} is outside [1, {}]",
                   o.finest, morton::max_level<Dim>);
@@ -232,25 +261,19 @@ SceneRunner<Dim>::SceneRunner(SceneRunner&&) noexcept = default;
 
 template <int Dim>
 bool SceneRunner<Dim>::done() const {
-  if (scene_.time.steps >= 0) return sim_->step() >= scene_.time.steps;
-  return sim_->time() >= scene_.time.end * (1 - 1e-12);
+  return detail::run_done(scene_.time, sim_->step(), sim_->time());
 }
 
 template <int Dim>
 std::string SceneRunner<Dim>::stem(const char* what, long index) const {
-  return (std::filesystem::path(settings_.out) / fmt::format("{}_{}_{:06d}", scene_.name, what, index))
-      .string();
+  return detail::file_stem(settings_.out, scene_.name, what, index);
 }
 
 template <int Dim>
 const PicStepReport& SceneRunner<Dim>::step() {
   const auto t0 = std::chrono::steady_clock::now();
   const SceneTime& t = scene_.time;
-  double dt = std::clamp(sim_->stable_dt(t.cfl, t.dt_max), t.dt_min, t.dt_max);
-  if (t.steps < 0) {
-    const double left = t.end - sim_->time();
-    if (dt > left || left - dt < 1e-3 * dt) dt = left;  // land on the end time, no sliver step after
-  }
+  const double dt = detail::next_step(t, sim_->stable_dt(t.cfl, t.dt_max), sim_->time());
   last_ = sim_->advance(dt);
   ++steps_;
   ppe_iterations_ += last_.ppe.iterations;
@@ -272,7 +295,7 @@ const PicStepReport& SceneRunner<Dim>::step() {
   sum_regular_particles_ += fine_cells > 0 ? regular * static_cast<double>(fine_particles) / fine_cells
                                            : static_cast<double>(last_.n_particles);
   if (settings_.frames && !settings_.out.empty() &&
-      (done() || (scene_.output.every > 0 && sim_->time() >= next_frame_ - 1e-9 * scene_.output.every)))
+      (done() || detail::frame_due(scene_.output, sim_->time(), next_frame_)))
     write_frame();
   if (settings_.checkpoint_every > 0 && sim_->step() % settings_.checkpoint_every == 0) checkpoint();
   wall_ += seconds_since(t0);
@@ -315,9 +338,7 @@ void SceneRunner<Dim>::write_frame() {
     written_.push_back(io_->series->path());
   }
   ++frame_;
-  next_frame_ = scene_.output.every > 0
-                    ? (std::floor(s.time() / scene_.output.every + 1e-9) + 1) * scene_.output.every
-                    : std::numeric_limits<double>::infinity();
+  next_frame_ = detail::next_frame_time(scene_.output, s.time());
 }
 
 template <int Dim>

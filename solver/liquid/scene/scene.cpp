@@ -294,12 +294,14 @@ std::string format_box(const Box<Dim>& b) {
                      fmt::join(b.hi.data(), b.hi.data() + Dim, ", "));
 }
 
-
-const std::vector<std::string> sph_keys = {
-    "spacing", "levels",      "resample_every", "alpha",       "beta",        "kernel",
-    "pressure", "density",    "density_diffusion", "rest_density", "sound_speed", "viscosity",
-    "search",  "surface",     "settle",         "gate_lo",     "gate_hi",     "restitution",
-    "seed",    "turn_angle",  "turn_duration",  "turn_pivot",  "turn_axis"};
+const std::vector<std::string> sph_keys = {"spacing",      "levels",      "resample_every",
+                                           "alpha",        "beta",        "kernel",
+                                           "pressure",     "density",     "density_diffusion",
+                                           "rest_density", "sound_speed", "viscosity",
+                                           "search",       "surface",     "settle",
+                                           "gate_lo",      "gate_hi",     "restitution",
+                                           "seed",         "turn_angle",  "turn_duration",
+                                           "turn_pivot",   "turn_axis"};
 
 /// The value of `choices` whose name (to_string) is `name`.
 template <class E>
@@ -344,8 +346,8 @@ void read_sph(const TableReader& r, Scene<Dim>& s) {
   o.fluid.density_update =
       by_name(r.choice("density", names_of(updates), sph::to_string(o.fluid.density_update)), updates);
   o.fluid.density_diffusion = r.number("density_diffusion", o.fluid.density_diffusion);
-  LIQUID_VERIFY(o.fluid.density_diffusion >= 0.0 && o.fluid.density_diffusion <= 1.0, "{}: {} is outside [0, 1]",
-                r.where("density_diffusion"), o.fluid.density_diffusion);
+  LIQUID_VERIFY(o.fluid.density_diffusion >= 0.0 && o.fluid.density_diffusion <= 1.0,
+                "{}: {} is outside [0, 1]", r.where("density_diffusion"), o.fluid.density_diffusion);
   o.fluid.rest_density = r.positive("rest_density", o.fluid.rest_density);
   if (r.has("sound_speed")) sc.sound_speed = r.positive("sound_speed");
   o.fluid.viscosity = r.number("viscosity", o.fluid.viscosity);
@@ -369,11 +371,12 @@ void read_sph(const TableReader& r, Scene<Dim>& s) {
                   r.where("gate_lo"));
   }
   o.restitution = r.number("restitution", o.restitution);
-  LIQUID_VERIFY(o.restitution >= 0.0 && o.restitution <= 1.0, "{}: {} is outside [0, 1]", r.where("restitution"),
-                o.restitution);
+  LIQUID_VERIFY(o.restitution >= 0.0 && o.restitution <= 1.0, "{}: {} is outside [0, 1]",
+                r.where("restitution"), o.restitution);
   o.seed = static_cast<std::uint64_t>(r.integer_in("seed", 0, std::numeric_limits<long>::max(), 1));
   const double angle = r.number("turn_angle", 0.0);
-  LIQUID_VERIFY(std::abs(angle) <= 3600.0, "{}: {} degrees is more than ten turns", r.where("turn_angle"), angle);
+  LIQUID_VERIFY(std::abs(angle) <= 3600.0, "{}: {} degrees is more than ten turns", r.where("turn_angle"),
+                angle);
   o.rotation.angle = angle * std::numbers::pi / 180.0;
   if (!o.rotation.active())
     for (const char* key : {"turn_duration", "turn_pivot", "turn_axis"})
@@ -381,7 +384,8 @@ void read_sph(const TableReader& r, Scene<Dim>& s) {
   o.rotation.duration = r.positive("turn_duration", 1.0);
   o.rotation.pivot = r.vec<Dim>("turn_pivot", s.pic.domain.centre());
   if (r.has("turn_axis")) {
-    LIQUID_VERIFY(Dim == 3, "{}: a 2D container turns about z; turn_axis is for 3D scenes", r.where("turn_axis"));
+    LIQUID_VERIFY(Dim == 3, "{}: a 2D container turns about z; turn_axis is for 3D scenes",
+                  r.where("turn_axis"));
     const Vec<Dim> axis = r.vec<Dim>("turn_axis");
     LIQUID_VERIFY(axis.norm() > 0.0, "{}: the axis must not be zero", r.where("turn_axis"));
     for (int d = 0; d < Dim; ++d) o.rotation.axis[d] = axis[d] / axis.norm();
@@ -411,8 +415,12 @@ double sph_sound_speed(const Scene<Dim>& scene) {
     fall = scene.pic.domain.size().norm();
   } else if (g.norm() > 0.0) {
     const Vec<Dim> up = -g / g.norm();
-    const auto lowest = [&](const Box<Dim>& b) { return up.dot(b.centre()) - 0.5 * up.cwiseAbs().dot(b.size()); };
-    const auto highest = [&](const Box<Dim>& b) { return up.dot(b.centre()) + 0.5 * up.cwiseAbs().dot(b.size()); };
+    const auto lowest = [&](const Box<Dim>& b) {
+      return up.dot(b.centre()) - 0.5 * up.cwiseAbs().dot(b.size());
+    };
+    const auto highest = [&](const Box<Dim>& b) {
+      return up.dot(b.centre()) + 0.5 * up.cwiseAbs().dot(b.size());
+    };
     double top = highest(scene.liquid_bounds);
     for (const Box<Dim>& b : scene.source_bounds) top = std::max(top, highest(b));
     fall = std::max(0.0, top - lowest(scene.pic.domain));
@@ -462,8 +470,7 @@ sph::SphOptions<Dim> sph_options(const Scene<Dim>& scene) {
   return o;
 }
 
-namespace {
-}  // namespace
+namespace {}  // namespace
 
 int scene_dimension(const std::string& path) {
   const toml::table doc = parse(path);

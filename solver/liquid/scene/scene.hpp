@@ -61,8 +61,8 @@ struct SphScene {
   /// source to the bottom of the domain (a turning container: its diagonal). Stiffness k = rho_0 c^2;
   /// density errors stay near (v / c)^2, about 1%.
   double sound_speed = 0.0;
-  double settle = 0.0;                 ///< seconds the liquid settles (AdaptiveSph::relax) before t = 0
-  bool gate = false;                   ///< it settles held in gate_box (a dam's gate, gone at t = 0)
+  double settle = 0.0;  ///< seconds the liquid settles (AdaptiveSph::relax) before t = 0
+  bool gate = false;    ///< it settles held in gate_box (a dam's gate, gone at t = 0)
   Box<Dim> gate_box;
   sph::SurfaceModel surface = sph::SurfaceModel::distance;  ///< the surface meshed in the frames
 };
@@ -82,7 +82,7 @@ struct Scene {
   bool grid_given = false;        ///< the file has a [grid] table (PIC methods need it)
   bool sph = false;               ///< solver.method = "sph": the adaptive SPH solver runs it
   SphScene<Dim> sph_scene;
-  Box<Dim> liquid_bounds;         ///< the bounding box of the [[fluid]] shapes that add liquid
+  Box<Dim> liquid_bounds;               ///< the bounding box of the [[fluid]] shapes that add liquid
   std::vector<Box<Dim>> source_bounds;  ///< each [[source]]'s bounding box
   double max_initial_speed = 0.0;       ///< the fastest [[fluid]] velocity given
   /// "sph" or the PIC transfer's name.

@@ -31,8 +31,8 @@ SphSceneRunner<Dim>::SphSceneRunner(Scene<Dim> scene, RunSettings settings)
 template <int Dim>
 SphSceneRunner<Dim>::SphSceneRunner(Scene<Dim> scene, RunSettings settings, bool seed)
     : scene_(std::move(scene)), settings_(std::move(settings)), io_(std::make_unique<Private>()) {
-  LIQUID_VERIFY(scene_.sph, "{}: a PIC scene (method {}) runs with SceneRunner, not the SPH runner", scene_.path,
-                scene_.method());
+  LIQUID_VERIFY(scene_.sph, "{}: a PIC scene (method {}) runs with SceneRunner, not the SPH runner",
+                scene_.path, scene_.method());
   LIQUID_VERIFY(settings_.checkpoint_every >= 0, "checkpoint interval {} is negative",
                 settings_.checkpoint_every);
   LIQUID_VERIFY(settings_.checkpoint_every == 0 || !settings_.out.empty(),
@@ -66,25 +66,19 @@ SphSceneRunner<Dim>::SphSceneRunner(SphSceneRunner&&) noexcept = default;
 
 template <int Dim>
 bool SphSceneRunner<Dim>::done() const {
-  if (scene_.time.steps >= 0) return sim_->steps() >= scene_.time.steps;
-  return sim_->time() >= scene_.time.end * (1 - 1e-12);
+  return detail::run_done(scene_.time, sim_->steps(), sim_->time());
 }
 
 template <int Dim>
 std::string SphSceneRunner<Dim>::stem(const char* what, long index) const {
-  return (std::filesystem::path(settings_.out) / fmt::format("{}_{}_{:06d}", scene_.name, what, index))
-      .string();
+  return detail::file_stem(settings_.out, scene_.name, what, index);
 }
 
 template <int Dim>
 const sph::SphStepReport& SphSceneRunner<Dim>::step() {
   const auto t0 = std::chrono::steady_clock::now();
   const SceneTime& t = scene_.time;
-  double dt = std::clamp(sim_->stable_dt(t.cfl, t.dt_max), t.dt_min, t.dt_max);
-  if (t.steps < 0) {
-    const double left = t.end - sim_->time();
-    if (dt > left || left - dt < 1e-3 * dt) dt = left;  // land on the end time, no sliver step after
-  }
+  const double dt = detail::next_step(t, sim_->stable_dt(t.cfl, t.dt_max), sim_->time());
   last_ = sim_->advance(dt);
   ++steps_;
   split_ += last_.resampling.split;
@@ -101,7 +95,7 @@ const sph::SphStepReport& SphSceneRunner<Dim>::step() {
   sum_single_ += single;
   max_density_error_ = std::max(max_density_error_, last_.max_density_error);
   if (settings_.frames && !settings_.out.empty() &&
-      (done() || (scene_.output.every > 0 && sim_->time() >= next_frame_ - 1e-9 * scene_.output.every)))
+      (done() || detail::frame_due(scene_.output, sim_->time(), next_frame_)))
     write_frame();
   if (settings_.checkpoint_every > 0 && sim_->steps() % settings_.checkpoint_every == 0) checkpoint();
   wall_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -169,9 +163,7 @@ void SphSceneRunner<Dim>::write_frame() {
     written_.push_back(io_->series->path());
   }
   ++frame_;
-  next_frame_ = scene_.output.every > 0
-                    ? (std::floor(time / scene_.output.every + 1e-9) + 1) * scene_.output.every
-                    : std::numeric_limits<double>::infinity();
+  next_frame_ = detail::next_frame_time(scene_.output, time);
 }
 
 namespace {
@@ -185,7 +177,8 @@ std::vector<double> flatten(const std::vector<Vec<Dim>>& v) {
 }
 
 template <int Dim>
-std::vector<Vec<Dim>> unflatten(const std::vector<double>& v, const std::string& name, const std::string& path) {
+std::vector<Vec<Dim>> unflatten(const std::vector<double>& v, const std::string& name,
+                                const std::string& path) {
   LIQUID_VERIFY(v.size() % Dim == 0, "{}: {} has {} values, not a multiple of {}", path, name, v.size(), Dim);
   std::vector<Vec<Dim>> out(v.size() / Dim);
   for (std::size_t i = 0; i < out.size(); ++i)
@@ -222,7 +215,8 @@ std::string SphSceneRunner<Dim>::checkpoint() {
   w.put_string("sph/rng", st.rng);
   w.put_scalar("run/frame", static_cast<std::int64_t>(frame_));
   w.put_scalar("run/next_frame", next_frame_);
-  const std::vector<std::int64_t> counts = {steps_, split_, merged_, emitted_, min_particles_, max_particles_};
+  const std::vector<std::int64_t> counts = {steps_,   split_,         merged_,
+                                            emitted_, min_particles_, max_particles_};
   w.put("run/counts", std::span<const std::int64_t>(counts));
   const std::vector<double> sums = {sum_particles_, sum_single_, max_density_error_};
   w.put("run/sums", std::span<const double>(sums));
@@ -242,7 +236,8 @@ SphSceneRunner<Dim> SphSceneRunner<Dim>::resume(const std::string& checkpoint, R
   detail::get_run_settings(r, settings);
   Scene<Dim> scene = load_scene<Dim>(settings.scene_path);
   apply_overrides<Dim>(settings.overrides, scene);
-  LIQUID_VERIFY(scene.sph, "{}: its scene {} no longer runs with method sph", checkpoint, settings.scene_path);
+  LIQUID_VERIFY(scene.sph, "{}: its scene {} no longer runs with method sph", checkpoint,
+                settings.scene_path);
 
   sph::SphState<Dim> st;
   sph::SphParticles<Dim>& q = st.particles;

@@ -77,13 +77,14 @@ void SphOptions<Dim>::check() const {
     LIQUID_VERIFY(static_cast<bool>(src.region) && src.bounds.valid(),
                   "sph: source {} needs a region and bounds with lo < hi", k + 1);
     LIQUID_VERIFY(src.velocity.allFinite(), "sph: source {}'s velocity must be finite", k + 1);
-    LIQUID_VERIFY(src.start >= 0.0 && src.stop > src.start, "sph: source {} needs 0 <= start < stop, not {} and {}",
-                  k + 1, src.start, src.stop);
+    LIQUID_VERIFY(src.start >= 0.0 && src.stop > src.start,
+                  "sph: source {} needs 0 <= start < stop, not {} and {}", k + 1, src.start, src.stop);
   }
   if (rotation.active()) {
-    LIQUID_VERIFY(std::isfinite(rotation.angle) && rotation.duration > 0.0 && std::isfinite(rotation.duration),
-                  "sph: the container's turn needs a finite angle and a positive duration, not {} and {}",
-                  rotation.angle, rotation.duration);
+    LIQUID_VERIFY(
+        std::isfinite(rotation.angle) && rotation.duration > 0.0 && std::isfinite(rotation.duration),
+        "sph: the container's turn needs a finite angle and a positive duration, not {} and {}",
+        rotation.angle, rotation.duration);
     LIQUID_VERIFY(rotation.pivot.allFinite(), "sph: the container's pivot must be finite");
     LIQUID_VERIFY(std::abs(rotation.axis.norm() - 1.0) < 1e-9, "sph: the turn's axis must be a unit vector");
   }
@@ -161,7 +162,8 @@ int AdaptiveSph<Dim>::apply_sources() {
     }
     // The lattice over the bounds, centred as seed() centres its lattice in the container.
     Eigen::Matrix<long, Dim, 1> n;
-    for (int d = 0; d < Dim; ++d) n[d] = std::max<long>(1, static_cast<long>(std::floor(src.bounds.size()[d] / s + 1e-9)));
+    for (int d = 0; d < Dim; ++d)
+      n[d] = std::max<long>(1, static_cast<long>(std::floor(src.bounds.size()[d] / s + 1e-9)));
     const Vec<Dim> offset =
         src.bounds.lo + 0.5 * (src.bounds.size() - s * (n.template cast<double>() - Vec<Dim>::Ones()));
     Eigen::Matrix<long, Dim, 1> k = Eigen::Matrix<long, Dim, 1>::Zero();
@@ -501,16 +503,20 @@ void AdaptiveSph<Dim>::restore(SphState<Dim> st) {
   const std::size_t n = q.x.size();
   LIQUID_VERIFY(q.v.size() == n && q.a.size() == n && q.level.size() == n && q.mass.size() == n &&
                     q.radius.size() == n && q.density.size() == n && q.drho.size() == n &&
-                    q.pressure.size() == n && q.distance.size() == n && q.foot.size() == n && q.elfs.size() == n,
+                    q.pressure.size() == n && q.distance.size() == n && q.foot.size() == n &&
+                    q.elfs.size() == n,
                 "sph: the saved particle arrays differ in length");
   for (std::size_t i = 0; i < n; ++i) {
     LIQUID_VERIFY(q.level[i] >= 0 && q.level[i] <= options_.max_level,
-                  "sph: saved particle {} has level {}, outside 0..{}", i, int(q.level[i]), options_.max_level);
-    LIQUID_VERIFY(q.mass[i] == sizes_.mass_of(q.level[i]),
-                  "sph: saved particle {} has mass {}, not its level's {} (other fluid constants or spacing?)", i,
-                  q.mass[i], sizes_.mass_of(q.level[i]));
+                  "sph: saved particle {} has level {}, outside 0..{}", i, int(q.level[i]),
+                  options_.max_level);
+    LIQUID_VERIFY(
+        q.mass[i] == sizes_.mass_of(q.level[i]),
+        "sph: saved particle {} has mass {}, not its level's {} (other fluid constants or spacing?)", i,
+        q.mass[i], sizes_.mass_of(q.level[i]));
   }
-  LIQUID_VERIFY(std::isfinite(st.time) && st.time >= 0.0 && st.steps >= 0, "sph: the saved clock is not valid");
+  LIQUID_VERIFY(std::isfinite(st.time) && st.time >= 0.0 && st.steps >= 0,
+                "sph: the saved clock is not valid");
   std::istringstream text(st.rng);
   std::mt19937_64 rng;
   text >> rng;

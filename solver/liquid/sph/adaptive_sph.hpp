@@ -50,11 +50,11 @@ struct SphSource {
 /// sin(2 pi u) / (2 pi)), u = t / duration, until `duration`, then it rests at `angle` (radians; about
 /// the z axis in 2D, about `axis` in 3D). The turn starts and ends with no angular velocity or
 /// acceleration: leap-frog's first kick then needs no half step (with a sudden angular acceleration
-/// at t = 0 a free particle ends a quarter turn 4e-4 off at dt = 1e-4, first order in dt). The simulation runs in the container's frame, where the walls and the
-/// obstacles stand still: gravity turns the other way, and the frame's fictitious accelerations are
-/// added (Euler -w' x r, Coriolis -2 w x v, centrifugal -w x (w x r), r from the pivot), so the
-/// motion is that of the turning container, not an approximation of it. world() maps a point of the
-/// container's frame to the world's.
+/// at t = 0 a free particle ends a quarter turn 4e-4 off at dt = 1e-4, first order in dt). The simulation
+/// runs in the container's frame, where the walls and the obstacles stand still: gravity turns the other way,
+/// and the frame's fictitious accelerations are added (Euler -w' x r, Coriolis -2 w x v, centrifugal -w x (w
+/// x r), r from the pivot), so the motion is that of the turning container, not an approximation of it.
+/// world() maps a point of the container's frame to the world's.
 template <int Dim>
 struct SphRotation {
   double angle = 0.0;     ///< radians; 0: the container stands still
@@ -63,8 +63,8 @@ struct SphRotation {
   Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();  ///< 3D only (a unit vector)
   bool active() const { return angle != 0.0; }
   double theta(double t) const;
-  double omega(double t) const;         ///< d theta / dt
-  double omega_rate(double t) const;    ///< d^2 theta / dt^2
+  double omega(double t) const;       ///< d theta / dt
+  double omega_rate(double t) const;  ///< d^2 theta / dt^2
   /// v turned by the angle a (about z in 2D, `axis` in 3D).
   Vec<Dim> turn(const Vec<Dim>& v, double a) const;
   /// A point of the container's frame at time t in the world's.

@@ -230,7 +230,8 @@ TEST(SphScene, ResumedRunEndsBitForBitLikeTheUninterruptedOne) {
   const SphRunSummary fs = full.summary();
   EXPECT_GT(fs.emitted, 0);
   EXPECT_GT(fs.split + fs.merged, 0);
-  const std::string half = (std::filesystem::path(settings.out) / "sph-pour-2d_checkpoint_000020.h5").string();
+  const std::string half =
+      (std::filesystem::path(settings.out) / "sph-pour-2d_checkpoint_000020.h5").string();
   ASSERT_TRUE(std::filesystem::exists(half));
   EXPECT_TRUE(checkpoint_is_sph(half));
 

@@ -123,7 +123,9 @@ void smoke_sph(const std::string& name, Table& table, CaseResult& result) {
   settings.scene_path = path;
   const bool sources = !scene.pic.sources.empty();
   const std::string key = fmt::format("{} sph", name);
-  const auto level0 = [](const sph::AdaptiveSph<Dim>& sim) { return sim.particles().total_mass() / sim.sizes().mass; };
+  const auto level0 = [](const sph::AdaptiveSph<Dim>& sim) {
+    return sim.particles().total_mass() / sim.sizes().mass;
+  };
   try {
     SphSceneRunner<Dim> run(std::move(scene), settings);
     const double m0 = level0(run.solver());
@@ -152,10 +154,11 @@ void smoke_sph(const std::string& name, Table& table, CaseResult& result) {
     table.add_row({long(Dim), name, std::string("sph"), long(s.steps), s.time, n0,
                    long(run.solver().particles().size()), change, 0.0, long(timed), long(expected),
                    long(run.n_frames()), s.seconds.at("total")});
-    result.expect(std::abs(change) <= 1e-12,
-                  fmt::format("{}: the mass in level-0 particles moved by {:.3g} (relative) in {} steps, beyond "
-                              "what the sources added",
-                              key, change, kSteps));
+    result.expect(
+        std::abs(change) <= 1e-12,
+        fmt::format("{}: the mass in level-0 particles moved by {:.3g} (relative) in {} steps, beyond "
+                    "what the sources added",
+                    key, change, kSteps));
     result.expect(run.n_frames() >= 2, fmt::format("{}: {} frames written", key, run.n_frames()));
   } catch (const Error& e) {
     result.expect(false, fmt::format("{}: {}", key, e.what()));
