@@ -301,7 +301,8 @@ const std::vector<std::string> sph_keys = {"spacing",      "levels",      "resam
                                            "search",       "surface",     "settle",
                                            "gate_lo",      "gate_hi",     "restitution",
                                            "seed",         "turn_angle",  "turn_duration",
-                                           "turn_pivot",   "turn_axis"};
+                                           "turn_pivot",   "turn_axis",   "view_eye",
+                                           "view_target",  "view_angle"};
 
 /// The value of `choices` whose name (to_string) is `name`.
 template <class E>
@@ -383,6 +384,19 @@ void read_sph(const TableReader& r, Scene<Dim>& s) {
       LIQUID_VERIFY(!r.has(key), "{}: the container does not turn without sph.turn_angle", r.where(key));
   o.rotation.duration = r.positive("turn_duration", 1.0);
   o.rotation.pivot = r.vec<Dim>("turn_pivot", s.pic.domain.centre());
+  if (r.has("view_eye") || r.has("view_target") || r.has("view_angle")) {
+    for (const char* key : {"view_eye", "view_target", "view_angle"})
+      LIQUID_VERIFY(r.has(key), "{}: the view needs view_eye, view_target and view_angle; '{}' is missing",
+                    r.where_table(), key);
+    o.view.eye = r.vec<Dim>("view_eye");
+    o.view.target = r.vec<Dim>("view_target");
+    const double view_angle = r.number("view_angle");
+    LIQUID_VERIFY(view_angle > 0.0 && view_angle < 90.0, "{}: the half-angle {} is outside (0, 90) degrees",
+                  r.where("view_angle"), view_angle);
+    LIQUID_VERIFY((o.view.target - o.view.eye).norm() > 0.0, "{}: the target is the eye",
+                  r.where("view_target"));
+    o.view.half_angle = view_angle * std::numbers::pi / 180.0;
+  }
   if (r.has("turn_axis")) {
     LIQUID_VERIFY(Dim == 3, "{}: a 2D container turns about z; turn_axis is for 3D scenes",
                   r.where("turn_axis"));

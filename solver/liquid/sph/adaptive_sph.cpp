@@ -47,6 +47,17 @@ Vec<Dim> SphRotation<Dim>::turn(const Vec<Dim>& v, double a) const {
 }
 
 template <int Dim>
+double SphView<Dim>::distance(const Vec<Dim>& x) const {
+  const Vec<Dim> axis = (target - eye).normalized(), v = x - eye;
+  const double h = v.dot(axis), r = (v - h * axis).norm();
+  const double c = std::cos(half_angle), s = std::sin(half_angle);
+  const double lateral = r * c - h * s;  // signed distance to the cone's side, negative inside
+  if (lateral <= 0.0) return 0.0;
+  // Outside: the nearest point is on the side when x projects onto it, else the apex.
+  return r * s + h * c >= 0.0 ? lateral : v.norm();
+}
+
+template <int Dim>
 void SphOptions<Dim>::check() const {
   LIQUID_VERIFY(container.valid(), "sph: the container box must have lo < hi along every axis");
   LIQUID_VERIFY(spacing > 0.0 && std::isfinite(spacing), "sph: the particle spacing must be positive, not {}",
@@ -80,6 +91,10 @@ void SphOptions<Dim>::check() const {
     LIQUID_VERIFY(src.start >= 0.0 && src.stop > src.start,
                   "sph: source {} needs 0 <= start < stop, not {} and {}", k + 1, src.start, src.stop);
   }
+  if (view.active())
+    LIQUID_VERIFY(view.half_angle < std::numbers::pi / 2 && view.eye.allFinite() && view.target.allFinite() &&
+                      (view.target - view.eye).norm() > 0.0,
+                  "sph: the view needs a half-angle within (0, 90) degrees and an eye apart from its target");
   if (rotation.active()) {
     LIQUID_VERIFY(
         std::isfinite(rotation.angle) && rotation.duration > 0.0 && std::isfinite(rotation.duration),
@@ -294,6 +309,11 @@ void AdaptiveSph<Dim>::redistance_and_resample(SphStepReport& report) {
   {
     auto t = timer_.scope("elfs");
     report.features = feature_size<Dim>(p_, nbrs_, options_.gamma_degrees);
+    if (options_.view.active()) {
+      const int n = p_.size();
+#pragma omp parallel for schedule(static)
+      for (int i = 0; i < n; ++i) p_.elfs[i] += options_.view.distance(p_.x[i]);
+    }
   }
   auto t = timer_.scope("resample");
   const SolidTest<Dim> solid = [this](const Vec<Dim>& x) { return in_solid(x); };
@@ -527,6 +547,8 @@ void AdaptiveSph<Dim>::restore(SphState<Dim> st) {
   rng_ = rng;
 }
 
+template struct SphView<2>;
+template struct SphView<3>;
 template struct SphRotation<2>;
 template struct SphRotation<3>;
 template struct SphOptions<2>;

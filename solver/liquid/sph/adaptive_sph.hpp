@@ -7,7 +7,8 @@
 //               is built on redistancing steps either way)
 //   forces      density, pressure, pair forces, gravity
 //   redistance  (every k-th step) particle-to-surface distances on the distance surface
-//   elfs        (every k-th step, adaptive) medial axis and extended local feature size
+//   elfs        (every k-th step, adaptive) medial axis and extended local feature size (plus the
+//               distance to the view, with SphOptions::view)
 //   resample    (every k-th step, adaptive) split and merge
 //   integrate   leap-frog: v += dt a, x += dt v (velocities live at half steps)
 //   collisions  particles pushed out of obstacles and back into the container, inward velocity removed
@@ -71,6 +72,19 @@ struct SphRotation {
   Vec<Dim> world(const Vec<Dim>& x, double t) const { return pivot + turn(x - pivot, theta(t)); }
 };
 
+/// The view-dependent sampling condition of Sec. 4.3: each particle's elfs gets its distance to the
+/// region in view added before the split/merge test (split when elfs + d_view < alpha r_i, merge
+/// when > beta r_i), so liquid out of sight coarsens. The paper's view frustum is taken as the cone
+/// of the camera's field of view (a wedge in 2D): apex `eye`, axis towards `target`, half-angle
+/// `half_angle` (radians, within (0, pi/2)); d_view is the exact distance to that cone, 0 inside.
+template <int Dim>
+struct SphView {
+  Vec<Dim> eye = Vec<Dim>::Zero(), target = Vec<Dim>::Ones();
+  double half_angle = 0.0;  ///< 0: no view condition
+  bool active() const { return half_angle > 0.0; }
+  double distance(const Vec<Dim>& x) const;
+};
+
 template <int Dim>
 struct SphOptions {
   Box<Dim> container;                              ///< the tank: particles stay inside it
@@ -97,6 +111,7 @@ struct SphOptions {
   std::uint64_t seed = 1;    ///< the split directions' random stream
   std::vector<SphSource<Dim>> sources;
   SphRotation<Dim> rotation;  ///< the container's turn (none by default)
+  SphView<Dim> view;          ///< the view-dependent condition (none by default)
 
   /// Throws liquid::Error naming the first impossible value.
   void check() const;
