@@ -96,7 +96,9 @@ struct SphOptions {
   bool adaptive = true;
   int max_level = 3;            ///< coarsest level a merge may make
   int resample_every = 5;       ///< redistance / elfs / resample every k-th step (paper: 5)
-  ResampleOptions resampling;   ///< alpha, beta (max_level is taken from above)
+  /// alpha, beta (max_level is taken from above): the paper's 2 and 3 in 3D, beta 3.37 in 2D
+  /// (ResampleOptions::for_dimension says why)
+  ResampleOptions resampling = ResampleOptions::for_dimension(Dim);
   double gamma_degrees = 60.0;  ///< medial-axis angle
   int projection_bisections = 1;
   /// Radius of the footpoint disks, in support radii (the paper's: 1). Measured on the still 2D tank
