@@ -9,7 +9,9 @@ with a log-log plot (PNG) of every error series a case records under "series", d
 second-order reference slope (linear axes for a series marked "scale": "linear", such as a
 quantity over time). Scene runs in DIR/frames/<scene>/ (liquid run --out, with
 DIR/frames/<scene>.json from --json) add a picture of their last frame and their Table 1 row;
-DIR/table1/table1.md (ci/bench-scenes) is included when present.
+SPH scene runs in DIR/frames-sph/ likewise (particles by level and the surface mesh);
+DIR/table1/table1.md (ci/bench-scenes) and DIR/table1-sph/table1-sph.md (ci/bench-sph-scenes) are
+included when present.
 """
 
 import json
@@ -132,6 +134,41 @@ def scene_section(out_dir):
     return "\n".join(lines + [""] + pictures) + "\n"
 
 
+def sph_scene_section(out_dir):
+    """Pictures of the last frame of every SPH scene run in DIR/frames-sph, with its Table 1 row."""
+    frames = out_dir / "frames-sph"
+    if not frames.is_dir():
+        return ""
+    lines = ["## SPH scenes", "",
+             "`liquid run` on SPH scenes (2D): the last frame (particles coloured by level, the distance "
+             "surface in red) and the run's Table 1 row (Adams et al. 2007). single res: the level-0 particles "
+             "a single-resolution run holds for the same liquid.", ""]
+    lines += ["| scene | steps | t (s) | particles | single res | gain | neighbours s | forces s | redistance s "
+              "| elfs s | resample s | total s |", "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: "
+              "| ---: | ---: | ---: |"]
+    pictures = []
+    for summary in sorted(frames.glob("*.json")):
+        name = summary.stem
+        s = json.loads(summary.read_text())
+        sec = s["seconds_per_step"]
+        gain = s["single_particles"] / s["particles"] if s["particles"] else 0.0
+        lines.append(f"| {name} | {s['steps']} | {s['time']:.3f} | {s['particles']:.0f} | "
+                     f"{s['single_particles']:.0f} | {gain:.2f}x | {sec.get('neighbours', 0):.5f} | "
+                     f"{sec.get('forces', 0):.5f} | {sec.get('redistance', 0):.5f} | {sec.get('elfs', 0):.5f} | "
+                     f"{sec.get('resample', 0):.5f} | {sec.get('total', 0):.5f} |")
+        particles = sorted((frames / name).glob(f"{name}_particles_*.h5"))
+        surface = sorted((frames / name).glob(f"{name}_surface_*.h5"))
+        if particles and surface:
+            png = f"frame-{name}.png"
+            done = subprocess.run(["/usr/bin/python3",
+                                   str(pathlib.Path(__file__).with_name("sph_frame_picture.py")), str(particles[-1]),
+                                   str(surface[-1]), str(out_dir / png),
+                                   f"{name}, t = {s['time']:.2f} s (last frame)"])
+            if done.returncode == 0:
+                pictures.append(f"![{name}]({png})")
+    return "\n".join(lines + [""] + pictures) + "\n"
+
+
 def fmt(value):
     if value is None:
         return "-"
@@ -170,6 +207,10 @@ def main():
     if table1.exists():
         # Its pictures lie beside it, in table1/.
         scenes += "\n" + table1.read_text().replace("](table1-", "](table1/table1-")
+    scenes += "\n" + sph_scene_section(out_dir)
+    table1_sph = out_dir / "table1-sph" / "table1-sph.md"
+    if table1_sph.exists():
+        scenes += "\n" + table1_sph.read_text()
     report = "\n".join(lines) + "\n" + "\n".join(sections) + "\n" + scenes
     (out_dir / "README.md").write_text(report)
     return 0
