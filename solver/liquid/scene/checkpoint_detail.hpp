@@ -3,6 +3,7 @@
 // cadence), their file names, and in checkpoints the command line's overrides, the run's settings
 // and the frames of the time series written so far.
 
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -21,6 +22,9 @@ bool run_done(const SceneTime& time, long step, double now);
 bool frame_due(const SceneOutput& output, double now, double next_frame);
 /// When the frame after one written at `now` is due (infinity without output.every).
 double next_frame_time(const SceneOutput& output, double now);
+/// Creates settings.out when it is set (throws naming it when it cannot), and returns the writer of
+/// its series OUT/NAME.xmf when frames are written (else null).
+std::unique_ptr<io::SeriesWriter> open_output(const RunSettings& settings, const std::string& name);
 /// OUT/NAME_WHAT_IIIIII
 std::string file_stem(const std::string& out, const std::string& name, const char* what, long index);
 

@@ -50,6 +50,15 @@ double next_frame_time(const SceneOutput& output, double now) {
                           : std::numeric_limits<double>::infinity();
 }
 
+std::unique_ptr<io::SeriesWriter> open_output(const RunSettings& settings, const std::string& name) {
+  if (settings.out.empty()) return nullptr;
+  std::error_code ec;
+  std::filesystem::create_directories(settings.out, ec);
+  LIQUID_VERIFY(!ec, "cannot create the output folder '{}': {}", settings.out, ec.message());
+  if (!settings.frames) return nullptr;
+  return std::make_unique<io::SeriesWriter>((std::filesystem::path(settings.out) / (name + ".xmf")).string());
+}
+
 std::string file_stem(const std::string& out, const std::string& name, const char* what, long index) {
   return (std::filesystem::path(out) / fmt::format("{}_{}_{:06d}", name, what, index)).string();
 }
@@ -239,14 +248,7 @@ SceneRunner<Dim>::SceneRunner(Scene<Dim> scene, RunSettings settings, bool seed)
                 settings_.checkpoint_every);
   LIQUID_VERIFY(settings_.checkpoint_every == 0 || !settings_.out.empty(),
                 "checkpoints need an output folder (--out)");
-  if (!settings_.out.empty()) {
-    std::error_code ec;
-    std::filesystem::create_directories(settings_.out, ec);
-    LIQUID_VERIFY(!ec, "cannot create the output folder '{}': {}", settings_.out, ec.message());
-    if (settings_.frames)
-      io_->series = std::make_unique<io::SeriesWriter>(
-          (std::filesystem::path(settings_.out) / (scene_.name + ".xmf")).string());
-  }
+  io_->series = detail::open_output(settings_, scene_.name);
   sim_ = std::make_unique<AdaptivePic<Dim>>(scene_.pic);
   if (seed) {
     sim_->seed(scene_.liquid, scene_.velocity);

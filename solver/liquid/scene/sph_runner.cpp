@@ -19,6 +19,28 @@
 
 namespace liquid {
 
+namespace {
+
+template <int Dim>
+std::vector<double> flatten(const std::vector<Vec<Dim>>& v) {
+  std::vector<double> out(v.size() * Dim);
+  for (std::size_t i = 0; i < v.size(); ++i)
+    for (int d = 0; d < Dim; ++d) out[i * Dim + d] = v[i][d];
+  return out;
+}
+
+template <int Dim>
+std::vector<Vec<Dim>> unflatten(const std::vector<double>& v, const std::string& name,
+                                const std::string& path) {
+  LIQUID_VERIFY(v.size() % Dim == 0, "{}: {} has {} values, not a multiple of {}", path, name, v.size(), Dim);
+  std::vector<Vec<Dim>> out(v.size() / Dim);
+  for (std::size_t i = 0; i < out.size(); ++i)
+    for (int d = 0; d < Dim; ++d) out[i][d] = v[i * Dim + d];
+  return out;
+}
+
+}  // namespace
+
 template <int Dim>
 struct SphSceneRunner<Dim>::Private {
   std::unique_ptr<io::SeriesWriter> series;
@@ -39,14 +61,7 @@ SphSceneRunner<Dim>::SphSceneRunner(Scene<Dim> scene, RunSettings settings, bool
                 "checkpoints need an output folder (--out)");
   sim_ = std::make_unique<sph::AdaptiveSph<Dim>>(sph_options<Dim>(scene_));
   sum_per_level_.assign(sim_->options().max_level + 1, 0.0);
-  if (!settings_.out.empty()) {
-    std::error_code ec;
-    std::filesystem::create_directories(settings_.out, ec);
-    LIQUID_VERIFY(!ec, "cannot create the output folder '{}': {}", settings_.out, ec.message());
-    if (settings_.frames)
-      io_->series = std::make_unique<io::SeriesWriter>(
-          (std::filesystem::path(settings_.out) / (scene_.name + ".xmf")).string());
-  }
+  io_->series = detail::open_output(settings_, scene_.name);
   if (!seed) return;
   sim_->seed(scene_.liquid);
   const SphScene<Dim>& sc = scene_.sph_scene;
@@ -114,9 +129,9 @@ void SphSceneRunner<Dim>::write_frame() {
     for (Vec<Dim>& xi : x) xi = turn.world(xi, time);
   std::vector<std::string> grids;
   if (scene_.output.particles) {
-    std::vector<double> v(static_cast<std::size_t>(n) * Dim), speed(n), level(n), elfs(n);
+    const std::vector<double> v = flatten<Dim>(p.v);
+    std::vector<double> speed(n), level(n), elfs(n);
     for (int i = 0; i < n; ++i) {
-      for (int d = 0; d < Dim; ++d) v[static_cast<std::size_t>(i) * Dim + d] = p.v[i][d];
       speed[i] = p.v[i].norm();
       level[i] = p.level[i];
       // Not estimated yet (new particles, or a run that is not adaptive): written as -1.
@@ -165,28 +180,6 @@ void SphSceneRunner<Dim>::write_frame() {
   ++frame_;
   next_frame_ = detail::next_frame_time(scene_.output, time);
 }
-
-namespace {
-
-template <int Dim>
-std::vector<double> flatten(const std::vector<Vec<Dim>>& v) {
-  std::vector<double> out(v.size() * Dim);
-  for (std::size_t i = 0; i < v.size(); ++i)
-    for (int d = 0; d < Dim; ++d) out[i * Dim + d] = v[i][d];
-  return out;
-}
-
-template <int Dim>
-std::vector<Vec<Dim>> unflatten(const std::vector<double>& v, const std::string& name,
-                                const std::string& path) {
-  LIQUID_VERIFY(v.size() % Dim == 0, "{}: {} has {} values, not a multiple of {}", path, name, v.size(), Dim);
-  std::vector<Vec<Dim>> out(v.size() / Dim);
-  for (std::size_t i = 0; i < out.size(); ++i)
-    for (int d = 0; d < Dim; ++d) out[i][d] = v[i * Dim + d];
-  return out;
-}
-
-}  // namespace
 
 template <int Dim>
 std::string SphSceneRunner<Dim>::checkpoint() {

@@ -170,10 +170,12 @@ int AdaptiveSph<Dim>::apply_sources() {
       return k;
     };
     std::vector<std::vector<int>> bucket(static_cast<std::size_t>(cells.prod()));
+    // Only particles in the grid (the bounds and one cell more) can be inside the region.
     for (int i = 0; i < p_.size(); ++i) {
-      if (src.region(p_.x[i]) < 0.0) p_.v[i] = src.velocity;
       Eigen::Matrix<long, Dim, 1> c = Eigen::Matrix<long, Dim, 1>::Zero();
-      if (cell_of(p_.x[i], c)) bucket[flat(c)].push_back(i);
+      if (!cell_of(p_.x[i], c)) continue;
+      bucket[flat(c)].push_back(i);
+      if (src.region(p_.x[i]) < 0.0) p_.v[i] = src.velocity;
     }
     // The lattice over the bounds, centred as seed() centres its lattice in the container.
     Eigen::Matrix<long, Dim, 1> n;

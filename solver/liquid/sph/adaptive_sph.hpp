@@ -94,8 +94,8 @@ struct SphOptions {
   double spacing = 0.02;  ///< level-0 particle spacing (m); support radius = h_ratio * spacing
   double h_ratio = 2.5;   ///< the paper's h
   bool adaptive = true;
-  int max_level = 3;            ///< coarsest level a merge may make
-  int resample_every = 5;       ///< redistance / elfs / resample every k-th step (paper: 5)
+  int max_level = 3;       ///< coarsest level a merge may make
+  int resample_every = 5;  ///< redistance / elfs / resample every k-th step (paper: 5)
   /// alpha, beta (max_level is taken from above): the paper's 2 and 3 in 3D, beta 3.37 in 2D
   /// (ResampleOptions::for_dimension says why)
   ResampleOptions resampling = ResampleOptions::for_dimension(Dim);

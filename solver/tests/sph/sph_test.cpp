@@ -3,11 +3,11 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <functional>
 #include <numbers>
-#include <algorithm>
-#include <array>
 #include <random>
 
 #include "liquid/core/error.hpp"
@@ -529,11 +529,13 @@ TEST(SphView, DistanceToTheWedgeMatchesTheNearestPointOfItsSides) {
     // Brute force: inside when within the half-angle of the axis; else the nearest point of the two
     // sides (rays from the eye), sampled finely.
     const Vec<2> v = x - view.eye;
-    const bool inside = v.norm() > 0 && std::acos(std::clamp(v.normalized().dot(axis), -1.0, 1.0)) <= view.half_angle;
+    const bool inside =
+        v.norm() > 0 && std::acos(std::clamp(v.normalized().dot(axis), -1.0, 1.0)) <= view.half_angle;
     double best = v.norm();
     for (double sign : {-1.0, 1.0}) {
       const double a = sign * view.half_angle;
-      const Vec<2> side(std::cos(a) * axis[0] - std::sin(a) * axis[1], std::sin(a) * axis[0] + std::cos(a) * axis[1]);
+      const Vec<2> side(std::cos(a) * axis[0] - std::sin(a) * axis[1],
+                        std::sin(a) * axis[0] + std::cos(a) * axis[1]);
       best = std::min(best, (v - std::max(0.0, v.dot(side)) * side).norm());
     }
     EXPECT_NEAR(view.distance(x), inside ? 0.0 : best, 1e-12) << x.transpose();

@@ -82,7 +82,8 @@ template <int Dim>
 Solid<Dim> sphere_solid() {
   const double radius = 0.3;
   const Vec<Dim> centre = Vec<Dim>::Constant(0.5);
-  const double volume = Dim == 2 ? std::numbers::pi * radius * radius : 4.0 / 3.0 * std::numbers::pi * std::pow(radius, 3);
+  const double volume =
+      Dim == 2 ? std::numbers::pi * radius * radius : 4.0 / 3.0 * std::numbers::pi * std::pow(radius, 3);
   return {"sphere", levelset::sphere<Dim>(centre, radius),
           Box<Dim>{centre.array() - radius, centre.array() + radius}, volume,
           [](const Vec<Dim>&, double) { return true; }};
@@ -107,7 +108,8 @@ Errors face_errors(const surface::Mesh<Dim>& mesh, const Solid<Dim>& solid, doub
 }
 
 template <int Dim>
-Errors surface_errors(const sph::SphParticles<Dim>& p, SurfaceModel model, const Solid<Dim>& solid, double s) {
+Errors surface_errors(const sph::SphParticles<Dim>& p, SurfaceModel model, const Solid<Dim>& solid,
+                      double s) {
   const sph::PointTree<Dim> tree(p.x);
   const sph::SurfaceField<Dim> field(tree, p.x, p.radius, p.distance, model);
   const surface::Function<Dim> phi = [&](const Vec<Dim>& x) { return -field.value(x); };
@@ -166,8 +168,8 @@ CaseResult measure(const Solid<Dim>& solid, const CaseOptions& options) {
   Table table(
       fmt::format("distance of the surface from the faces of a {}D {}, in spacings s = {:.4g} "
                   "(N = {} random particles, down-sampled to {} in {} passes; levels {}, {}, {}, {}, {})",
-                  Dim, solid.what, s, n, p.size(), passes, per_level[0], per_level[1], per_level[2], per_level[3],
-                  per_level[4]),
+                  Dim, solid.what, s, n, p.size(), passes, per_level[0], per_level[1], per_level[2],
+                  per_level[3], per_level[4]),
       {"surface", "mean before", "max before", "stray before", "mean after", "max after", "stray after",
        "mean moved"});
   double moved[3];
@@ -200,8 +202,8 @@ CaseResult measure(const Solid<Dim>& solid, const CaseOptions& options) {
           fmt::format("the paper's claim (the distance surface least sensitive to resampling) {}: its mean "
                       "moved {:.3g} s, Zhu-Bridson's {:.3g} s, the blobbies' {:.3g} s",
                       claim ? "holds" : "does not hold here", moved[0], moved[1], moved[2]));
-  result.notes.push_back(fmt::format("{}D {}: {} particles down-sampled to {} ({:.0f}%)", Dim, solid.what, n, p.size(),
-                                     100.0 * p.size() / static_cast<double>(n)));
+  result.notes.push_back(fmt::format("{}D {}: {} particles down-sampled to {} ({:.0f}%)", Dim, solid.what, n,
+                                     p.size(), 100.0 * p.size() / static_cast<double>(n)));
   result.tables.push_back(std::move(table));
   return result;
 }
