@@ -463,6 +463,9 @@ sph::SphOptions<Dim> sph_options(const Scene<Dim>& scene) {
                   scene.path);
     o.spacing = 0.5 * std::ldexp(pic.domain.size().minCoeff(), -pic.fine_level);
   }
+  LIQUID_VERIFY(o.spacing < pic.domain.size().minCoeff(),
+                "{}: sph.spacing {} is not below the domain's shortest side {}: no particle fits", scene.path,
+                o.spacing, pic.domain.size().minCoeff());
   const double particles = scene.liquid_bounds.volume() / std::pow(o.spacing, Dim);
   constexpr double budget = 5e7;
   LIQUID_VERIFY(particles <= budget,

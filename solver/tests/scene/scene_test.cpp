@@ -1,5 +1,6 @@
 // Scenes: every built-in scene file loads; the loader's values and overrides; a run resumed from a
 // checkpoint ends bit for bit where the uninterrupted run ends, frames included.
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -258,6 +259,74 @@ TEST(SphScene, ResumedRunEndsBitForBitLikeTheUninterruptedOne) {
   // A PIC runner refuses the SPH checkpoint and the SPH runner a PIC scene.
   EXPECT_THROW(SceneRunner<2>::resume(half, again), Error);
   EXPECT_THROW(SphSceneRunner<2>(load_scene<2>(find_scene("pool-2d")), RunSettings{}), Error);
+}
+
+TEST(SphScene, EveryKeyRefusesABadValueByName) {
+  // Each entry: the [sph] lines (replacing the spacing line) and what the message must name.
+  const std::vector<std::pair<std::string, std::string>> bad{
+      {"spacing = -0.01", "key 'sph.spacing': must be positive"},
+      {"spacing = nan", "key 'sph.spacing': expected a finite number"},
+      {"spacing = \"small\"", "key 'sph.spacing': expected a number, found a string"},
+      {"spacing = 1e-7", "over the budget"},
+      {"spacing = 5.0", "is not below the domain's shortest side"},
+      {"spacing = 0.02\nlevels = -1", "key 'sph.levels': -1 is outside"},
+      {"spacing = 0.02\nlevels = 99", "key 'sph.levels': 99 is outside"},
+      {"spacing = 0.02\nresample_every = 0", "key 'sph.resample_every': 0 is outside"},
+      {"spacing = 0.02\nalpha = 0.0", "key 'sph.alpha': must be positive"},
+      {"spacing = 0.02\nkernel = \"\"", "key 'sph.kernel': '' is not one of"},
+      {"spacing = 0.02\ndensity = \"sum\"", "key 'sph.density': 'sum' is not one of"},
+      {"spacing = 0.02\npressure = 3", "key 'sph.pressure': expected a string"},
+      {"spacing = 0.02\ndensity_diffusion = 2.0", "key 'sph.density_diffusion': 2 is outside"},
+      {"spacing = 0.02\nrest_density = 0.0", "key 'sph.rest_density': must be positive"},
+      {"spacing = 0.02\nsound_speed = -5.0", "key 'sph.sound_speed': must be positive"},
+      {"spacing = 0.02\nviscosity = -1.0", "key 'sph.viscosity': must not be negative"},
+      {"spacing = 0.02\nviscosity = inf", "key 'sph.viscosity': expected a finite number"},
+      {"spacing = 0.02\nsearch = \"octree\"", "key 'sph.search': 'octree' is not one of"},
+      {"spacing = 0.02\nsurface = \"marching\"", "key 'sph.surface': 'marching' is not one of"},
+      {"spacing = 0.02\nsettle = -0.1", "key 'sph.settle': must not be negative"},
+      {"spacing = 0.02\nsettle = 0.1\ngate_lo = [0.0, 0.0]", "give both gate_lo and gate_hi"},
+      {"spacing = 0.02\nsettle = 0.1\ngate_lo = [0.0, 0.0]\ngate_hi = [2.0, 0.6]",
+       "reaches outside the domain"},
+      {"spacing = 0.02\nsettle = 0.1\ngate_lo = [0.5, 0.0]\ngate_hi = [0.4, 0.6]", "hi must exceed lo"},
+      {"spacing = 0.02\nrestitution = 1.5", "key 'sph.restitution': 1.5 is outside"},
+      {"spacing = 0.02\nseed = -1", "key 'sph.seed': -1 is outside"},
+      {"spacing = 0.02\nturn_angle = 1e9", "more than ten turns"},
+      {"spacing = 0.02\nturn_angle = 90.0\nturn_duration = 0.0", "key 'sph.turn_duration': must be positive"},
+      {"spacing = 0.02\nturn_duration = 1.0", "does not turn without sph.turn_angle"},
+      {"spacing = 0.02\nturn_angle = 90.0\nturn_pivot = [0.5]", "key 'sph.turn_pivot': expected 2 numbers"},
+      {"spacing = 0.02\nview_eye = [0.5, 2.0]\nview_target = [0.5, 2.0]\nview_angle = 20.0",
+       "the target is the eye"},
+      {"spacing = 0.02\nview_eye = [0.5, 2.0]\nview_target = [0.5, 0.0]\nview_angle = nan",
+       "key 'sph.view_angle': expected a finite number"},
+      {"spacing = 0.02\n[output]\nsurface = 1", "key 'output.surface': expected true or false"},
+  };
+  const std::string dir = temp_folder("sph-bad-keys");
+  int k = 0;
+  for (const auto& [lines, expected] : bad) {
+    const std::string path = fmt::format("{}/bad-{}.toml", dir, k++);
+    {
+      std::ofstream out(path);
+      out << "[domain]\nlo = [0.0, 0.0]\nhi = [1.0, 1.0]\n[solver]\nmethod = \"sph\"\n[time]\nend = 1.0\n"
+             "[[fluid]]\nshape = \"box\"\nlo = [0.0, 0.0]\nhi = [0.4, 0.6]\n[sph]\n"
+          << lines << "\n";
+    }
+    try {
+      load_scene<2>(path);
+      ADD_FAILURE() << "accepted: " << lines;
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find(expected), std::string::npos) << lines << "\n" << e.what();
+    }
+  }
+  // 3D: a turn about no axis.
+  const std::string path3 = dir + "/axis.toml";
+  {
+    std::ofstream out(path3);
+    out << "[domain]\nlo = [0.0, 0.0, 0.0]\nhi = [1.0, 1.0, 1.0]\n[solver]\nmethod = \"sph\"\n[time]\nend = "
+           "1.0\n"
+           "[[fluid]]\nshape = \"box\"\nlo = [0.0, 0.0, 0.0]\nhi = [0.4, 0.6, 1.0]\n[sph]\nspacing = 0.05\n"
+           "turn_angle = 90.0\nturn_axis = [0.0, 0.0, 0.0]\n";
+  }
+  EXPECT_THROW(load_scene<3>(path3), Error);
 }
 
 }  // namespace
