@@ -23,6 +23,8 @@ const char* to_string(SurfaceModel model) {
 }
 
 namespace {
+/// More distinct radii than this are not levels: one tree, searched within the largest.
+constexpr std::size_t kMaxGroups = 16;
 /// The integral of the surface weight over its support: pi r^2 / 4 (2D), 64 pi r^3 / 315 (3D).
 template <int Dim>
 double weight_integral(double r) {
@@ -41,7 +43,26 @@ SurfaceField<Dim>::SurfaceField(const PointTree<Dim>& tree, std::span<const Vec<
   LIQUID_VERIFY(model != SurfaceModel::distance || distance.size() == x.size(),
                 "SurfaceField: the distance model needs one distance per particle ({} for {})",
                 distance.size(), x.size());
-  for (double r : radius) max_radius_ = std::max(max_radius_, r);
+  std::vector<double> radii;
+  for (double r : radius) {
+    max_radius_ = std::max(max_radius_, r);
+    if (radii.size() <= kMaxGroups && std::find(radii.begin(), radii.end(), r) == radii.end())
+      radii.push_back(r);
+  }
+  if (radii.size() < 2 || radii.size() > kMaxGroups) return;
+  std::sort(radii.begin(), radii.end());
+  groups_.resize(radii.size());
+  for (std::size_t g = 0; g < radii.size(); ++g) groups_[g].radius = radii[g];
+  for (std::size_t i = 0; i < radius.size(); ++i) {
+    const auto g = std::lower_bound(radii.begin(), radii.end(), radius[i]) - radii.begin();
+    groups_[g].index.push_back(static_cast<std::int32_t>(i));
+  }
+  std::vector<Vec<Dim>> points;
+  for (Group& group : groups_) {
+    points.clear();
+    for (std::int32_t i : group.index) points.push_back(x[i]);
+    group.tree.build(points);
+  }
 }
 
 template <int Dim>
@@ -52,25 +73,33 @@ double SurfaceField<Dim>::value(const Vec<Dim>& y) const {
 template <int Dim>
 std::pair<double, Vec<Dim>> SurfaceField<Dim>::value_gradient(const Vec<Dim>& y) const {
   thread_local std::vector<std::pair<std::uint32_t, double>> hits;
-  tree_.within(y, max_radius_, hits);
   using Mat = Eigen::Matrix<double, Dim, Dim>;
   double W = 0.0, D = 0.0;
   Vec<Dim> A = Vec<Dim>::Zero(), gW = Vec<Dim>::Zero(), gD = Vec<Dim>::Zero();
   Mat gA = Mat::Zero();  // gA(k, l) = d(sum w_i x_i,k) / d y_l
-  for (const auto& [j, d2] : hits) {
+  const auto add = [&](std::size_t j, double d2) {
     const double r = radius_[j], q = std::sqrt(d2);
-    if (q >= r) continue;
+    if (q >= r) return;
     const double w = surface_weight(q, r);
     const Vec<Dim> gw = q > 0.0 ? Vec<Dim>((surface_weight_slope(q, r) / q) * (y - x_[j])) : Vec<Dim>::Zero();
     if (model_ == SurfaceModel::blobby) {
       const double s = r / spacing_ratio_, scale = std::pow(s, Dim) / weight_integral<Dim>(r);
       W += scale * w, gW += scale * gw;
-      continue;
+      return;
     }
     const double d = model_ == SurfaceModel::distance ? distance_[j] : 0.5 * r;
     W += w, gW += gw;
     D += w * d, gD += d * gw;
     A += w * x_[j], gA += x_[j] * gw.transpose();
+  };
+  if (groups_.empty()) {
+    tree_.within(y, max_radius_, hits);
+    for (const auto& [j, d2] : hits) add(j, d2);
+  } else {
+    for (const Group& group : groups_) {
+      group.tree.within(y, group.radius, hits);
+      for (const auto& [k, d2] : hits) add(static_cast<std::size_t>(group.index[k]), d2);
+    }
   }
   if (model_ == SurfaceModel::blobby) return {W - 0.5, gW};
   if (W <= 0.0) return {-max_radius_, Vec<Dim>::Zero()};

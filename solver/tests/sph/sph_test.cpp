@@ -7,6 +7,7 @@
 #include <array>
 #include <cmath>
 #include <functional>
+#include <limits>
 #include <numbers>
 #include <random>
 
@@ -251,6 +252,58 @@ double redistance_error(const levelset::Function<Dim>& phi, const Box<Dim>& box,
     if (-phi(p.x[i]) < depth && keep(p.x[i]) < 0.0)
       worst = std::max(worst, std::abs(p.distance[i] + phi(p.x[i])));
   return worst / s;
+}
+
+/// The distance surface (Eqs. 5-7) by a sum over every particle, for the test below.
+template <int Dim>
+double distance_surface_by_brute_force(const SphParticles<Dim>& p, const Vec<Dim>& y) {
+  double W = 0.0, D = 0.0;
+  Vec<Dim> A = Vec<Dim>::Zero();
+  for (int j = 0; j < p.size(); ++j) {
+    const double q = (y - p.x[j]).norm();
+    if (q >= p.radius[j]) continue;
+    const double w = surface_weight(q, p.radius[j]);
+    W += w, D += w * p.distance[j], A += w * p.x[j];
+  }
+  return W > 0.0 ? D / W - (A / W - y).norm() : std::numeric_limits<double>::quiet_NaN();
+}
+
+template <int Dim>
+void surface_of_mixed_levels_matches_brute_force() {
+  // Levels 0-2 give three radii: the field searches one tree per radius within that radius.
+  Sizes sizes;
+  sizes.radius = 0.1;
+  SphParticles<Dim> p = random_particles<Dim>(sizes, 800, 11);
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  for (double& d : p.distance) d = 0.2 * u(rng);
+  const PointTree<Dim> tree(p.x);
+  const SurfaceField<Dim> phi(tree, p.x, p.radius, p.distance, SurfaceModel::distance);
+  int tested = 0;
+  for (int k = 0; k < 200; ++k) {
+    Vec<Dim> y;
+    for (int d = 0; d < Dim; ++d) y[d] = 0.1 + 0.8 * u(rng);
+    const double expected = distance_surface_by_brute_force<Dim>(p, y);
+    if (!std::isfinite(expected)) continue;
+    const auto [value, gradient] = phi.value_gradient(y);
+    EXPECT_NEAR(value, expected, 1e-12) << "at point " << k;
+    const double h = 1e-6;
+    for (int d = 0; d < Dim; ++d) {
+      Vec<Dim> a = y, b = y;
+      a[d] -= h, b[d] += h;
+      const double fd =
+          (distance_surface_by_brute_force<Dim>(p, b) - distance_surface_by_brute_force<Dim>(p, a)) / (2 * h);
+      EXPECT_NEAR(gradient[d], fd, 1e-5 * std::max(1.0, std::abs(fd))) << "at point " << k << ", axis " << d;
+    }
+    ++tested;
+  }
+  EXPECT_GT(tested, 150);
+}
+TEST(SphSurface, FieldOfMixedLevelsMatchesASumOverEveryParticle2D) {
+  surface_of_mixed_levels_matches_brute_force<2>();
+}
+TEST(SphSurface, FieldOfMixedLevelsMatchesASumOverEveryParticle3D) {
+  surface_of_mixed_levels_matches_brute_force<3>();
 }
 
 TEST(SphRedistance, ReturnsTheDistanceToAPlane) {
