@@ -1,0 +1,149 @@
+// Case sph-gain-scaling: how the adaptive gain grows with resolution, at sizes a full dam break
+// cannot afford here (Adams et al. 2007, Table 1; the goal: 4 times fewer particles and
+// 3 times faster in 3D).
+//
+// Problem. sph-adaptivity-gain's dam break: a column a wide and 2a high (a = 0.2 m) in the corner
+// of a tank [0, 5a] x [0, 3a] (3D: 2a deep, the column filling the depth), seeded as a lattice of
+// spacing s, and for the adaptive run resampled at rest until no particle changes (what
+// AdaptiveSph::seed does). Both runs then take `steps` steps of 0.25 s / c from the release (no
+// settling: the first steps of the collapse), resampling every 5th.
+// Measured per s: particles of both runs (their ratio: the memory gain), seconds a step (the median
+// over runs of 5 steps, each with its resampling step; their ratio: the speed gain), and the fitted growth of
+// both gains with 1/s, extrapolated to the spacing where the goal would be met. This is the start of the dam
+// break only: the gain over a whole run is sph-adaptivity-gain's (the liquid then spreads into thin sheets,
+// which need small particles). Expected: both gains grow as s shrinks (the coarse interior grows as a^d / s^d
+// while the level-0 band stays a few spacings thick: the memory gain tends to grow like 1/s). Asserted: the
+// adaptive run has fewer particles at every size, and the memory gain at the finest size exceeds that at the
+// coarsest. Full tier only (2D s = a/20 ... a/320, 3D s = a/16 ... a/48; about 5 minutes here). Gated: the
+// adaptive run's particles (mean over the steps) per size.
+
+#include <algorithm>
+#include <cmath>
+
+#include <fmt/format.h>
+
+#include "common/case.hpp"
+#include "common/fit.hpp"
+#include "liquid/core/timer.hpp"
+#include "liquid/levelset/levelset.hpp"
+#include "liquid/sph/adaptive_sph.hpp"
+
+namespace liquid::verification {
+namespace {
+
+constexpr double kA = 0.2, kGravity = 9.81;
+
+const char* const kPhases[] = {"neighbours", "forces",    "redistance", "elfs",
+                               "resample",   "integrate", "collisions", "total"};
+
+struct Sample {
+  double particles = 0.0, seconds_per_step = 0.0;
+  std::vector<double> phases;  ///< mean seconds a step of each of kPhases over the steps
+};
+
+template <int Dim>
+Sample run_start(bool adaptive, double s, int steps) {
+  sph::SphOptions<Dim> o;
+  Vec<Dim> hi = Vec<Dim>::Constant(2 * kA);
+  hi[0] = 5 * kA, hi[1] = 3 * kA;
+  o.container = Box<Dim>{Vec<Dim>::Zero(), hi};
+  o.spacing = s;
+  o.adaptive = adaptive;
+  const double c = 10.0 * std::sqrt(2.0 * kGravity * 2 * kA);
+  o.fluid.stiffness = o.fluid.rest_density * c * c;
+  sph::AdaptiveSph<Dim> sim(o);
+  Vec<Dim> column = Vec<Dim>::Constant(2 * kA);
+  column[0] = kA, column[1] = 2 * kA;
+  sim.seed(levelset::box<Dim>(Box<Dim>{Vec<Dim>::Zero(), column}));
+  const double dt = 0.25 * s / c;
+  const int every = o.resample_every;
+  Sample out;
+  std::vector<double> windows;  // seconds a step over each run of `every` steps (one resampling each)
+  std::vector<double> before;
+  for (const char* phase : kPhases) before.push_back(sim.timer().seconds(phase));  // seeding's passes
+  Stopwatch clock;
+  for (int k = 0; k < steps; ++k) {
+    out.particles += sim.advance(dt).particles;
+    if ((k + 1) % every == 0) windows.push_back(clock.seconds() / every), clock.restart();
+  }
+  std::sort(windows.begin(), windows.end());
+  out.seconds_per_step = windows[windows.size() / 2];
+  out.particles /= steps;
+  for (std::size_t k = 0; k < before.size(); ++k)
+    out.phases.push_back((sim.timer().seconds(kPhases[k]) - before[k]) / steps);
+  return out;
+}
+
+template <int Dim>
+void study(CaseResult& result, const std::vector<int>& divisions, int steps) {
+  Table table(
+      fmt::format("{}D dam break, the first {} steps: single resolution against adaptive", Dim, steps),
+      {"s", "single particles", "adaptive particles", "memory gain", "single s/step", "adaptive s/step",
+       "speed gain"});
+  Table phases(fmt::format("{}D: seconds a step by phase (means over the steps)", Dim),
+               {"s", "run", "neighbours", "forces", "redistance", "elfs", "resample", "integrate",
+                "collisions", "total", "total per particle"});
+  std::vector<double> h, memory, speed;
+  for (int division : divisions) {
+    const double s = kA / division;
+    const Sample single = run_start<Dim>(false, s, steps), adaptive = run_start<Dim>(true, s, steps);
+    for (const Sample* r : {&single, &adaptive}) {
+      std::vector<Table::Cell> row{fmt::format("a/{}", division),
+                                   std::string(r == &single ? "single" : "adaptive")};
+      for (double v : r->phases) row.push_back(v);
+      row.push_back(r->phases.back() / r->particles);
+      phases.add_row(std::move(row));
+    }
+    h.push_back(s / kA);
+    memory.push_back(single.particles / adaptive.particles);
+    speed.push_back(single.seconds_per_step / adaptive.seconds_per_step);
+    table.add_row({fmt::format("a/{}", division), single.particles, adaptive.particles, memory.back(),
+                   single.seconds_per_step, adaptive.seconds_per_step, speed.back()});
+    result.expect(adaptive.particles < single.particles,
+                  fmt::format("{}D, s = a/{}: adaptive {:.0f} particles, single {:.0f}", Dim, division,
+                              adaptive.particles, single.particles));
+    result.gate.push_back({fmt::format("{}D adaptive particles at a/{}", Dim, division),
+                           GateFigure::Kind::count, std::round(adaptive.particles)});
+  }
+  result.expect(memory.back() > memory.front(),
+                fmt::format("{}D: the memory gain grows with resolution ({:.2f} at a/{}, {:.2f} at a/{})",
+                            Dim, memory.front(), divisions.front(), memory.back(), divisions.back()));
+  // gain ~ (s/a)^k: k from the two finest sizes (the coarse ones are pre-asymptotic: no coarse
+  // particle fits in the column there) and from all, and where the goal would be met.
+  const std::size_t n = h.size();
+  Table fit(fmt::format("{}D: growth of the gains with resolution, gain ~ (s/a)^k", Dim),
+            {"gain", "k (all sizes)", "k (two finest)", "goal", "s/a where the goal is met (two finest)"});
+  for (const auto& [name, g, goal] : {std::tuple{"memory", &memory, 4.0}, std::tuple{"speed", &speed, 3.0}}) {
+    const double k_all = fit_order(h, *g);
+    const double k_last = std::log((*g)[n - 1] / (*g)[n - 2]) / std::log(h[n - 1] / h[n - 2]);
+    std::string where;
+    if ((*g)[n - 1] >= goal)
+      where = fmt::format("met at 1/{:.0f}", 1.0 / h[n - 1]);
+    else if (k_last < -0.05)
+      where = fmt::format("1/{:.0f} (extrapolated)",
+                          1.0 / (h[n - 1] * std::pow(goal / (*g)[n - 1], 1.0 / k_last)));
+    else
+      where = "not while it grows this slowly";
+    fit.add_row({std::string(name), k_all, k_last, goal, where});
+  }
+  result.tables.push_back(std::move(table));
+  result.tables.push_back(std::move(phases));
+  result.tables.push_back(std::move(fit));
+}
+
+CaseResult run_full(const CaseOptions&) {
+  CaseResult result;
+  study<2>(result, {20, 40, 80, 160, 320}, 80);
+  study<3>(result, {16, 24, 32, 48}, 40);
+  return result;
+}
+
+}  // namespace
+
+LIQUID_VERIFICATION_CASE(
+    {"sph-gain-scaling",
+     "SPH dam break start, single against adaptive at 2D s = a/20..a/320 and 3D s = a/16..a/48: memory and "
+     "speed gains against resolution, extrapolated to the issue's goal",
+     false, run_full, no_options});
+
+}  // namespace liquid::verification
