@@ -302,7 +302,7 @@ const std::vector<std::string> sph_keys = {"spacing",      "levels",      "resam
                                            "gate_lo",      "gate_hi",     "restitution",
                                            "seed",         "turn_angle",  "turn_duration",
                                            "turn_pivot",   "turn_axis",   "view_eye",
-                                           "view_target",  "view_angle"};
+                                           "view_target",  "view_angle",  "neighbour_skin"};
 
 /// The value of `choices` whose name (to_string) is `name`.
 template <class E>
@@ -349,6 +349,9 @@ void read_sph(const TableReader& r, Scene<Dim>& s) {
   o.fluid.density_diffusion = r.number("density_diffusion", o.fluid.density_diffusion);
   LIQUID_VERIFY(o.fluid.density_diffusion >= 0.0 && o.fluid.density_diffusion <= 1.0,
                 "{}: {} is outside [0, 1]", r.where("density_diffusion"), o.fluid.density_diffusion);
+  o.neighbour_skin = r.number("neighbour_skin", o.neighbour_skin);
+  LIQUID_VERIFY(o.neighbour_skin >= 0.0 && o.neighbour_skin <= 10.0, "{}: {} is outside [0, 10] spacings",
+                r.where("neighbour_skin"), o.neighbour_skin);
   o.fluid.rest_density = r.positive("rest_density", o.fluid.rest_density);
   if (r.has("sound_speed")) sc.sound_speed = r.positive("sound_speed");
   o.fluid.viscosity = r.number("viscosity", o.fluid.viscosity);

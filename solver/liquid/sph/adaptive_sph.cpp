@@ -59,6 +59,8 @@ double SphView<Dim>::distance(const Vec<Dim>& x) const {
 
 template <int Dim>
 void SphOptions<Dim>::check() const {
+  LIQUID_VERIFY(neighbour_skin >= 0.0 && std::isfinite(neighbour_skin),
+                "sph: the neighbour skin must be >= 0 level-0 spacings, not {}", neighbour_skin);
   LIQUID_VERIFY(container.valid(), "sph: the container box must have lo < hi along every axis");
   LIQUID_VERIFY(spacing > 0.0 && std::isfinite(spacing), "sph: the particle spacing must be positive, not {}",
                 spacing);
@@ -284,7 +286,39 @@ void AdaptiveSph<Dim>::find_neighbours_now(bool with_tree) {
   const bool kd = options_.search == NeighbourSearch::kd_tree ||
                   (options_.search == NeighbourSearch::automatic && Dim == 3 && options_.adaptive);
   if (kd || with_tree) tree_.build(p_.x);
-  nbrs_ = kd ? find_neighbours<Dim>(tree_, p_.x, p_.radius) : find_neighbours_cells<Dim>(p_.x, p_.radius);
+  const double skin = options_.neighbour_skin * options_.spacing;
+  std::vector<double> reach(p_.radius);
+  if (skin > 0.0)
+    for (double& r : reach) r += skin;
+  nbrs_ = kd ? find_neighbours<Dim>(tree_, p_.x, reach) : find_neighbours_cells<Dim>(p_.x, reach);
+  built_at_ = p_.x;
+}
+
+template <int Dim>
+bool AdaptiveSph<Dim>::lists_hold() const {
+  const int n = p_.size();
+  if (options_.neighbour_skin <= 0.0 || static_cast<int>(built_at_.size()) != n) return false;
+  const double half = 0.5 * options_.neighbour_skin * options_.spacing;
+  double moved = 0.0;
+#pragma omp parallel for schedule(static) reduction(max : moved)
+  for (int i = 0; i < n; ++i) moved = std::max(moved, (p_.x[i] - built_at_[i]).squaredNorm());
+  return moved < half * half;
+}
+
+template <int Dim>
+NeighbourLists AdaptiveSph<Dim>::within_support() const {
+  const int n = p_.size();
+  NeighbourLists exact;
+  exact.begin.assign(n + 1, 0);
+  exact.index.reserve(nbrs_.index.size());
+  for (int i = 0; i < n; ++i) {
+    for (int j : nbrs_.of(i)) {
+      const double r = std::max(p_.radius[i], p_.radius[j]);
+      if ((p_.x[i] - p_.x[j]).squaredNorm() < r * r) exact.index.push_back(j);
+    }
+    exact.begin[i + 1] = static_cast<std::int64_t>(exact.index.size());
+  }
+  return exact;
 }
 
 template <int Dim>
@@ -301,16 +335,22 @@ SphStepReport AdaptiveSph<Dim>::adapt_now() {
 
 template <int Dim>
 void AdaptiveSph<Dim>::redistance_and_resample(SphStepReport& report) {
+  NeighbourLists skinless;
+  if (options_.neighbour_skin > 0.0) {
+    auto t = timer_.scope("neighbours");
+    skinless = within_support();
+  }
+  const NeighbourLists& exact = options_.neighbour_skin > 0.0 ? skinless : nbrs_;
   {
     auto t = timer_.scope("redistance");
     report.redistancing =
-        redistance<Dim>(p_, nbrs_, tree_, options_.projection_bisections, options_.disk_radius);
+        redistance<Dim>(p_, exact, tree_, options_.projection_bisections, options_.disk_radius);
   }
   report.resampled = true;
   if (!options_.adaptive) return;
   {
     auto t = timer_.scope("elfs");
-    report.features = feature_size<Dim>(p_, nbrs_, options_.gamma_degrees);
+    report.features = feature_size<Dim>(p_, exact, options_.gamma_degrees);
     if (options_.view.active()) {
       const int n = p_.size();
 #pragma omp parallel for schedule(static)
@@ -319,7 +359,8 @@ void AdaptiveSph<Dim>::redistance_and_resample(SphStepReport& report) {
   }
   auto t = timer_.scope("resample");
   const SolidTest<Dim> solid = [this](const Vec<Dim>& x) { return in_solid(x); };
-  report.resampling = resample<Dim>(p_, nbrs_, sizes_, options_.resampling, solid, rng_);
+  report.resampling = resample<Dim>(p_, exact, sizes_, options_.resampling, solid, rng_);
+  if (report.resampling.split + report.resampling.merged > 0) built_at_.clear();
 }
 
 template <int Dim>
@@ -372,7 +413,8 @@ SphStepReport AdaptiveSph<Dim>::advance(double dt) {
   }
   {
     auto t = timer_.scope("neighbours");
-    find_neighbours_now(resampling);
+    report.searched = resampling || !lists_hold();
+    if (report.searched) find_neighbours_now(resampling);
   }
   report.pairs = nbrs_.n_pairs();
   {
@@ -521,6 +563,7 @@ SphState<Dim> AdaptiveSph<Dim>::state() const {
 
 template <int Dim>
 void AdaptiveSph<Dim>::restore(SphState<Dim> st) {
+  built_at_.clear();
   const SphParticles<Dim>& q = st.particles;
   const std::size_t n = q.x.size();
   LIQUID_VERIFY(q.v.size() == n && q.a.size() == n && q.level.size() == n && q.mass.size() == n &&

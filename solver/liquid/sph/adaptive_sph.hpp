@@ -109,6 +109,11 @@ struct SphOptions {
   double disk_radius = 0.5;
   /// How the neighbour lists are found; the k-d tree is built on redistancing steps either way.
   NeighbourSearch search = NeighbourSearch::automatic;
+  /// Verlet skin, in level-0 spacings: the lists hold the pairs within max(r_i, r_j) + skin and are
+  /// kept until a particle has moved half the skin, the particles change (a resampling that split or
+  /// merged, a source) or a redistancing step comes. The sums skip pairs beyond their support, so
+  /// the results are the same to the bit as with lists found every step (skin 0).
+  double neighbour_skin = 0.2;
   double restitution = 0.0;  ///< normal velocity kept (reversed) at a wall
   std::uint64_t seed = 1;    ///< the split directions' random stream
   std::vector<SphSource<Dim>> sources;
@@ -123,7 +128,8 @@ struct SphStepReport {
   double dt = 0.0;
   int particles = 0;
   std::vector<int> per_level;  ///< particles of each level after the step
-  long pairs = 0;              ///< neighbour pairs of the step
+  long pairs = 0;              ///< pairs in the step's neighbour lists (the skin's included)
+  bool searched = false;       ///< the lists were found this step (not kept from an earlier one)
   bool resampled = false;      ///< this step redistanced (and, adaptive, resampled)
   RedistanceStats redistancing;
   FeatureStats features;
@@ -195,6 +201,10 @@ class AdaptiveSph {
 
  private:
   void find_neighbours_now(bool with_tree);
+  /// True when nbrs_ still holds every pair within reach: the same particles, none moved half the skin.
+  bool lists_hold() const;
+  /// nbrs_ without the skin's pairs (what redistancing, elfs and resampling read).
+  NeighbourLists within_support() const;
   void collide();
   /// The sources' phase: imposed velocities, then new particles; returns how many were added.
   int apply_sources();
@@ -212,7 +222,8 @@ class AdaptiveSph {
   SphParticles<Dim> p_;
   Boundary<Dim> walls_;
   PointTree<Dim> tree_;
-  NeighbourLists nbrs_;
+  NeighbourLists nbrs_;             ///< the pairs within max(r_i, r_j) + skin at built_at_
+  std::vector<Vec<Dim>> built_at_;  ///< the positions nbrs_ were found at (empty: none current)
   PhaseTimer timer_;
   std::mt19937_64 rng_;
   double time_ = 0.0;

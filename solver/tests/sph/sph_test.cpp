@@ -402,6 +402,59 @@ TEST(SphResample, SplitAndMergeConserveMassAndMomentum3D) {
   split_and_merge_conserve<3>();
 }
 
+template <int Dim>
+void skin_changes_nothing() {
+  // A collapsing column, adaptive, 60 steps: lists kept between steps (the skin) against lists found
+  // every step. The state must agree to the bit, and the skin must have saved searches.
+  const auto run = [](double skin, long& searches) {
+    SphOptions<Dim> o;
+    Vec<Dim> hi = Vec<Dim>::Constant(0.3);
+    hi[0] = 0.6;
+    o.container = Box<Dim>{Vec<Dim>::Zero(), hi};
+    o.spacing = Dim == 2 ? 0.01 : 0.03;
+    o.neighbour_skin = skin;
+    o.fluid.stiffness = o.fluid.rest_density * 20.0 * 20.0;
+    AdaptiveSph<Dim> sim(o);
+    Vec<Dim> column = Vec<Dim>::Constant(0.3);
+    column[0] = 0.2;
+    sim.seed(levelset::box<Dim>(Box<Dim>{Vec<Dim>::Zero(), column}));
+    // Stirred: random velocities up to 1 m/s a component move neighbours apart by up to 0.025
+    // spacings a step, more than the thin skin, so lists kept too long would miss pairs.
+    std::mt19937_64 rng(17);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    for (Vec<Dim>& v : sim.particles().v)
+      for (int d = 0; d < Dim; ++d) v[d] = u(rng);
+    for (int k = 0; k < 60; ++k) searches += sim.advance(0.25 * o.spacing / 20.0).searched;
+    return sim.state();
+  };
+  // A thick skin (lists kept from one redistancing step to the next) and a thin one (lists found
+  // again as soon as a particle has moved half of it: every step here).
+  long without = 0;
+  const SphState<Dim> b = run(0.0, without);
+  EXPECT_EQ(without, 60);
+  for (double skin : {0.2, 0.02}) {
+    long searched = 0;
+    const SphState<Dim> a = run(skin, searched);
+    ASSERT_EQ(a.particles.size(), b.particles.size()) << "skin " << skin;
+    for (int i = 0; i < a.particles.size(); ++i) {
+      ASSERT_TRUE(a.particles.x[i] == b.particles.x[i]) << "skin " << skin << ", particle " << i;
+      ASSERT_TRUE(a.particles.v[i] == b.particles.v[i]) << "skin " << skin << ", particle " << i;
+      ASSERT_EQ(a.particles.density[i], b.particles.density[i]) << "skin " << skin << ", particle " << i;
+      ASSERT_EQ(a.particles.distance[i], b.particles.distance[i]) << "skin " << skin << ", particle " << i;
+    }
+    if (skin > 0.1)
+      EXPECT_LT(searched, 45) << "the skin saved too few neighbour searches (" << searched << " of 60)";
+    else
+      EXPECT_GT(searched, 30) << "the thin skin ran out on " << searched << " of 60 steps only";
+  }
+}
+TEST(AdaptiveSph, NeighbourSkinChangesNothingToTheBit2D) {
+  skin_changes_nothing<2>();
+}
+TEST(AdaptiveSph, NeighbourSkinChangesNothingToTheBit3D) {
+  skin_changes_nothing<3>();
+}
+
 TEST(AdaptiveSph, SeedsCoarseParticlesDeepInsideAndKeepsTheVolume) {
   SphOptions<2> o;
   o.container = Box<2>{Vec<2>(0, 0), Vec<2>(1, 1)};
@@ -430,6 +483,7 @@ TEST(AdaptiveSph, RefusesImpossibleOptions) {
       {"rest density", [](SphOptions<2>& o) { o.fluid.viscosity = -1.0; }},
       {"max_level", [](SphOptions<2>& o) { o.max_level = 99; }},
       {"resample_every", [](SphOptions<2>& o) { o.resample_every = 0; }},
+      {"neighbour skin", [](SphOptions<2>& o) { o.neighbour_skin = -1.0; }},
       {"gamma", [&](SphOptions<2>& o) { o.gamma_degrees = nan; }},
       {"disks", [](SphOptions<2>& o) { o.disk_radius = 0.0; }},
       {"delta", [](SphOptions<2>& o) { o.fluid.density_diffusion = 1e9; }},
