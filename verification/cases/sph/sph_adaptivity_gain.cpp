@@ -24,6 +24,7 @@
 #include <fmt/format.h>
 
 #include "common/case.hpp"
+#include "dam.hpp"
 #include "liquid/core/timer.hpp"
 #include "liquid/levelset/levelset.hpp"
 #include "liquid/sph/adaptive_sph.hpp"
@@ -31,7 +32,8 @@
 namespace liquid::verification {
 namespace {
 
-constexpr double kA = 0.2, kGravity = 9.81;
+using sph_dam::kA;
+using sph_dam::kGravity;
 /// Martin and Moyce 1952, Fig. 3, n^2 = 2, a = 2 1/4 in: (T = t sqrt(2g/a), Z = front / a).
 constexpr double kExperiment[][2] = {{0.832, 1.217}, {1.219, 1.474}, {1.997, 2.292}, {2.547, 2.995}};
 const char* const kPhases[] = {"neighbours", "forces",    "redistance", "elfs",
@@ -47,22 +49,12 @@ struct Run {
 
 template <int Dim>
 Run run_dam(bool adaptive, double s) {
-  sph::SphOptions<Dim> o;
-  Vec<Dim> hi = Vec<Dim>::Constant(2 * kA);
-  hi[0] = 5 * kA, hi[1] = 3 * kA;
-  o.container = Box<Dim>{Vec<Dim>::Zero(), hi};
-  o.spacing = s;
-  o.adaptive = adaptive;
-  const double c = 10.0 * std::sqrt(2.0 * kGravity * 2 * kA);
-  o.fluid.stiffness = o.fluid.rest_density * c * c;
-  sph::AdaptiveSph<Dim> sim(o);
-  Vec<Dim> column = Vec<Dim>::Constant(2 * kA);
-  column[0] = kA, column[1] = 2 * kA;
-  const Box<Dim> gate{Vec<Dim>::Zero(), column};
+  sph::AdaptiveSph<Dim> sim(sph_dam::options<Dim>(adaptive, s));
+  const Box<Dim> gate = sph_dam::column<Dim>();
   sim.seed(levelset::box<Dim>(gate));
   sim.relax(0.2, &gate);
   const double scale = std::sqrt(2 * kGravity / kA), end = 3.0 / scale;
-  const double dt = 0.25 * s / c;
+  const double dt = 0.25 * s / sph_dam::sound_speed();
   Run run;
   Stopwatch clock;
   double seconds = 0.0;

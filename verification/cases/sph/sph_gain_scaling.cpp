@@ -24,6 +24,7 @@
 
 #include "common/case.hpp"
 #include "common/fit.hpp"
+#include "dam.hpp"
 #include "liquid/core/timer.hpp"
 #include "liquid/levelset/levelset.hpp"
 #include "liquid/sph/adaptive_sph.hpp"
@@ -31,7 +32,7 @@
 namespace liquid::verification {
 namespace {
 
-constexpr double kA = 0.2, kGravity = 9.81;
+using sph_dam::kA;
 
 const char* const kPhases[] = {"neighbours", "forces",    "redistance", "elfs",
                                "resample",   "integrate", "collisions", "total"};
@@ -43,19 +44,10 @@ struct Sample {
 
 template <int Dim>
 Sample run_start(bool adaptive, double s, int steps) {
-  sph::SphOptions<Dim> o;
-  Vec<Dim> hi = Vec<Dim>::Constant(2 * kA);
-  hi[0] = 5 * kA, hi[1] = 3 * kA;
-  o.container = Box<Dim>{Vec<Dim>::Zero(), hi};
-  o.spacing = s;
-  o.adaptive = adaptive;
-  const double c = 10.0 * std::sqrt(2.0 * kGravity * 2 * kA);
-  o.fluid.stiffness = o.fluid.rest_density * c * c;
+  const sph::SphOptions<Dim> o = sph_dam::options<Dim>(adaptive, s);
   sph::AdaptiveSph<Dim> sim(o);
-  Vec<Dim> column = Vec<Dim>::Constant(2 * kA);
-  column[0] = kA, column[1] = 2 * kA;
-  sim.seed(levelset::box<Dim>(Box<Dim>{Vec<Dim>::Zero(), column}));
-  const double dt = 0.25 * s / c;
+  sim.seed(levelset::box<Dim>(sph_dam::column<Dim>()));
+  const double dt = 0.25 * s / sph_dam::sound_speed();
   const int every = o.resample_every;
   Sample out;
   std::vector<double> windows;  // seconds a step over each run of `every` steps (one resampling each)
