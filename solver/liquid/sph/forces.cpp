@@ -26,12 +26,12 @@ const char* to_string(PressureForm form) {
 }
 
 namespace {
-/// |x_i - x_j| < max(r_i, r_j): beyond it every kernel of the pair is zero, and the lists may hold
-/// such pairs (a Verlet skin); skipping them leaves every sum as it was, to the bit.
+/// |x_i - x_j|^2 (given) < max(r_i, r_j)^2: beyond it every kernel of the pair is zero, and the lists may
+/// hold such pairs (a Verlet skin); skipping them leaves every sum as it was, to the bit.
 template <int Dim>
-bool within_support(const SphParticles<Dim>& p, int i, int j) {
+bool within_support(const SphParticles<Dim>& p, int i, int j, double distance_squared) {
   const double r = std::max(p.radius[i], p.radius[j]);
-  return (p.x[i] - p.x[j]).squaredNorm() < r * r;
+  return distance_squared < r * r;
 }
 }  // namespace
 
@@ -63,9 +63,11 @@ void compute_density(SphParticles<Dim>& p, const NeighbourLists& nbrs, const Flu
 #pragma omp parallel for schedule(static)
   for (int i = 0; i < n; ++i) {
     double rho = p.mass[i] * density_kernel<Dim>(fluid, 0.0, p.radius[i]);
-    for (int j : nbrs.of(i))
-      if (within_support(p, i, j))
-        rho += p.mass[j] * density_kernel<Dim>(fluid, (p.x[i] - p.x[j]).norm(), p.radius[i]);
+    for (int j : nbrs.of(i)) {
+      const double q2 = (p.x[i] - p.x[j]).squaredNorm();
+      if (within_support(p, i, j, q2))
+        rho += p.mass[j] * density_kernel<Dim>(fluid, std::sqrt(q2), p.radius[i]);
+    }
     if (walls) rho += fluid.rest_density * walls->share(p.x[i], p.radius[i], fluid.kernels);
     p.density[i] = rho;
   }
@@ -92,8 +94,8 @@ void compute_density_rate(SphParticles<Dim>& p, const NeighbourLists& nbrs, cons
   for (int i = 0; i < n; ++i) {
     double rate = 0.0;
     for (int j : nbrs.of(i)) {
-      if (!within_support(p, i, j)) continue;
       const Vec<Dim> xij = p.x[i] - p.x[j];
+      if (!within_support(p, i, j, xij.squaredNorm())) continue;
       const Vec<Dim> grad = 0.5 * (pressure_kernel_gradient<Dim>(fluid, xij, p.radius[i]) +
                                    pressure_kernel_gradient<Dim>(fluid, xij, p.radius[j]));
       rate += p.mass[j] * (p.v[i] - p.v[j]).dot(grad);
@@ -138,7 +140,7 @@ void compute_accelerations(SphParticles<Dim>& p, const NeighbourLists& nbrs, con
   for (int i = 0; i < n; ++i) {
     Vec<Dim> f = Vec<Dim>::Zero();
     for (int j : nbrs.of(i))
-      if (within_support(p, i, j)) f += pair_force(p, i, j, fluid);
+      if (within_support(p, i, j, (p.x[i] - p.x[j]).squaredNorm())) f += pair_force(p, i, j, fluid);
     p.a[i] = f / p.mass[i] + gravity;
     if (walls && p.pressure[i] != 0.0)
       p.a[i] -= (p.pressure[i] * fluid.rest_density / (p.density[i] * p.density[i])) *

@@ -1,7 +1,7 @@
 #pragma once
 // The dam break of sph-adaptivity-gain and sph-gain-scaling: a water column a wide and 2a high
 // (a = 0.2 m; Martin and Moyce's n^2 = 2) in the corner of a tank [0, 5a] x [0, 3a] (3D: 2a deep,
-// the column filling the depth), with a speed of sound of 10 sqrt(2 g 2a).
+// the column filling the depth), with a speed of sound of 10 sqrt(2 g 2a), and the phases they time.
 
 #include <cmath>
 
@@ -11,6 +11,9 @@
 namespace liquid::verification::sph_dam {
 
 inline constexpr double kA = 0.2, kGravity = 9.81;
+/// The AdaptiveSph phases the dam-break cases tabulate, in the paper's Table 1 order.
+inline const char* const kPhases[] = {"neighbours", "forces",    "redistance", "elfs",
+                                      "resample",   "integrate", "collisions", "total"};
 
 /// The speed of sound: ten times the speed of a fall from the column's top.
 inline double sound_speed() {

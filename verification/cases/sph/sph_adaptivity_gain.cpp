@@ -36,8 +36,7 @@ using sph_dam::kA;
 using sph_dam::kGravity;
 /// Martin and Moyce 1952, Fig. 3, n^2 = 2, a = 2 1/4 in: (T = t sqrt(2g/a), Z = front / a).
 constexpr double kExperiment[][2] = {{0.832, 1.217}, {1.219, 1.474}, {1.997, 2.292}, {2.547, 2.995}};
-const char* const kPhases[] = {"neighbours", "forces",    "redistance", "elfs",
-                               "resample",   "integrate", "collisions", "total"};
+using sph_dam::kPhases;
 
 struct Run {
   std::vector<double> T, Z;

@@ -34,8 +34,7 @@ namespace {
 
 using sph_dam::kA;
 
-const char* const kPhases[] = {"neighbours", "forces",    "redistance", "elfs",
-                               "resample",   "integrate", "collisions", "total"};
+using sph_dam::kPhases;
 
 struct Sample {
   double particles = 0.0, seconds_per_step = 0.0;
