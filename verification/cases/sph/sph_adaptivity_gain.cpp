@@ -17,9 +17,14 @@
 // without a non-finite value, the adaptive one with fewer particles on average, and both fronts
 // within 25% of the experiment from T = 1.2 on (SPH without a free-surface correction runs ahead
 // early, and the experiment's own gate opening delays its start).
-// Gated: particles (mean), front deviations.
+// Gated: particles (mean) and both fronts' largest distance from the experiment; in the quick tier the
+// adaptive ones are medians over 5 runs with different split-direction seeds (one run's figures move
+// by more than the gate's tolerance when a sum is merely reordered). The adaptive front's distance from
+// the single one is asserted below 5% for every seed in the quick tier (measured 0.7-1.1%), not gated.
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 
 #include <fmt/format.h>
 
@@ -37,6 +42,8 @@ using sph_dam::kGravity;
 /// Martin and Moyce 1952, Fig. 3, n^2 = 2, a = 2 1/4 in: (T = t sqrt(2g/a), Z = front / a).
 constexpr double kExperiment[][2] = {{0.832, 1.217}, {1.219, 1.474}, {1.997, 2.292}, {2.547, 2.995}};
 using sph_dam::kPhases;
+/// Split-direction seeds of the quick tier's adaptive run (the full tier's runs take minutes: one).
+constexpr int kSeeds = 5;
 
 struct Run {
   std::vector<double> T, Z;
@@ -47,8 +54,10 @@ struct Run {
 };
 
 template <int Dim>
-Run run_dam(bool adaptive, double s) {
-  sph::AdaptiveSph<Dim> sim(sph_dam::options<Dim>(adaptive, s));
+Run run_dam(bool adaptive, double s, std::uint64_t seed = 1) {
+  sph::SphOptions<Dim> options = sph_dam::options<Dim>(adaptive, s);
+  options.seed = seed;
+  sph::AdaptiveSph<Dim> sim(options);
   const Box<Dim> gate = sph_dam::column<Dim>();
   sim.seed(levelset::box<Dim>(gate));
   sim.relax(0.2, &gate);
@@ -93,26 +102,71 @@ double front_at(const Run& r, double T) {
 }
 
 /// One dam break at spacing s; pushes its front curves to `series` (the report draws them).
+/// Z's largest relative difference between two runs over the first one's record.
+double front_difference(const Run& a, const Run& b) {
+  double worst = 0.0;
+  for (std::size_t k = 0; k < a.T.size(); ++k)
+    worst = std::max(worst, std::abs(front_at(b, a.T[k]) / a.Z[k] - 1.0));
+  return worst;
+}
+
+/// The median of v (the upper one of an even count).
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v[v.size() / 2];
+}
+
+/// One dam break at spacing s; pushes its front curves to `series` (the report draws them). The adaptive
+/// run is made once per split-direction seed (1..seeds): one split or merge decided differently changes
+/// the rest of the run, and a sum in another order (round-off) does that as a new seed does, so its
+/// figures are medians over the seeds.
 template <int Dim>
-CaseResult run_case(double s, const std::string& tag, Json& series) {
+CaseResult run_case(double s, int seeds, const std::string& tag, Json& series) {
   CaseResult result;
-  const Run single = run_dam<Dim>(false, s), adaptive = run_dam<Dim>(true, s);
+  const Run single = run_dam<Dim>(false, s);
+  std::vector<Run> runs;
+  for (int k = 0; k < seeds; ++k) runs.push_back(run_dam<Dim>(true, s, 1 + k));
+  auto name_of = [&](const Run* r) {
+    if (r == &single) return std::string("single");
+    return seeds == 1 ? std::string("adaptive") : fmt::format("adaptive, seed {}", 1 + (r - runs.data()));
+  };
   Table table(fmt::format("{}D dam break, s = a/{:.0f}: single resolution against adaptive (paper Table 1)",
                           Dim, kA / s),
               {"run", "particles (mean)", "min", "max", "steps", "s/step", "split", "merged"});
-  for (const auto* r : {&single, &adaptive})
-    table.add_row({std::string(r == &single ? "single" : "adaptive"), r->particles, long(r->min_particles),
-                   long(r->max_particles), r->steps, r->seconds_per_step, r->split, r->merged});
+  std::vector<const Run*> all{&single};
+  for (const Run& r : runs) all.push_back(&r);
+  for (const Run* r : all)
+    table.add_row({name_of(r), r->particles, long(r->min_particles), long(r->max_particles), r->steps,
+                   r->seconds_per_step, r->split, r->merged});
   Table phases(
       "seconds per step by phase (the paper's columns: neighbourhood = neighbours, projection = integrate "
       "+ collisions, redistancing = redistance)",
       {"run", "neighbours", "forces", "redistance", "elfs", "resample", "integrate", "collisions", "total"});
-  for (const auto* r : {&single, &adaptive}) {
+  for (const Run* r : all) {
     auto per = [&](const char* ph) { return r->timer.seconds(ph) / static_cast<double>(r->steps); };
-    phases.add_row({std::string(r == &single ? "single" : "adaptive"), per(kPhases[0]), per(kPhases[1]),
-                    per(kPhases[2]), per(kPhases[3]), per(kPhases[4]), per(kPhases[5]), per(kPhases[6]),
-                    per(kPhases[7])});
+    phases.add_row({name_of(r), per(kPhases[0]), per(kPhases[1]), per(kPhases[2]), per(kPhases[3]),
+                    per(kPhases[4]), per(kPhases[5]), per(kPhases[6]), per(kPhases[7])});
   }
+  // The adaptive figures: each one's median over the seeds.
+  Run adaptive = runs.front();
+  std::vector<double> particles, seconds, from_single, from_experiment;
+  double worst_single = 0.0;
+  for (const auto& e : kExperiment)
+    if (e[0] >= 1.2) worst_single = std::max(worst_single, std::abs(front_at(single, e[0]) / e[1] - 1.0));
+  for (const Run& r : runs) {
+    particles.push_back(r.particles), seconds.push_back(r.seconds_per_step);
+    from_single.push_back(front_difference(single, r));
+    double worst = 0.0;
+    for (const auto& e : kExperiment)
+      if (e[0] >= 1.2) worst = std::max(worst, std::abs(front_at(r, e[0]) / e[1] - 1.0));
+    from_experiment.push_back(worst);
+  }
+  adaptive.particles = median(particles), adaptive.seconds_per_step = median(seconds);
+  const double worst_pair = median(from_single), worst_adaptive = median(from_experiment);
+  if (seeds > 1)
+    table.add_row({fmt::format("adaptive, median of {}", seeds), adaptive.particles, std::string("-"),
+                   std::string("-"), adaptive.steps, adaptive.seconds_per_step, std::string("-"),
+                   std::string("-")});
   const double memory = single.particles / adaptive.particles,
                speed = single.seconds_per_step / adaptive.seconds_per_step;
   Table gain("gain: memory (particles) / speed, ours beside the paper's Table 1",
@@ -122,21 +176,27 @@ CaseResult run_case(double s, const std::string& tag, Json& series) {
        {std::tuple{"paper: flooding", 8.0, 6.6}, std::tuple{"paper: desk toy (2D)", 3.0, 2.8},
         std::tuple{"paper: teapot", 7.9, 7.7}, std::tuple{"paper: armadillos", 4.5, 4.3}})
     gain.add_row({std::string(name), m, v});
-  Table front("front Z = x / a against T = t sqrt(2g/a)", {"T", "experiment", "single", "adaptive"});
-  double worst_pair = 0.0, worst_single = 0.0, worst_adaptive = 0.0;
+  Table front(
+      seeds == 1
+          ? std::string("front Z = x / a against T = t sqrt(2g/a)")
+          : fmt::format("front Z = x / a against T = t sqrt(2g/a) (adaptive: the median of {} seeds)", seeds),
+      {"T", "experiment", "single", "adaptive"});
   for (const auto& e : kExperiment) {
-    const double zs = front_at(single, e[0]), za = front_at(adaptive, e[0]);
-    front.add_row({e[0], e[1], zs, za});
-    if (e[0] >= 1.2)
-      worst_single = std::max(worst_single, std::abs(zs / e[1] - 1.0)),
-      worst_adaptive = std::max(worst_adaptive, std::abs(za / e[1] - 1.0));
+    std::vector<double> z;
+    for (const Run& r : runs) z.push_back(front_at(r, e[0]));
+    front.add_row({e[0], e[1], front_at(single, e[0]), median(z)});
   }
-  for (std::size_t k = 0; k < single.T.size(); ++k)
-    worst_pair = std::max(worst_pair, std::abs(front_at(adaptive, single.T[k]) / single.Z[k] - 1.0));
-  result.notes.push_back(
-      fmt::format("the adaptive front differs from the single one by at most {:.1f}% over the "
-                  "run; from the experiment (T >= 1.2) single {:.1f}%, adaptive {:.1f}%",
-                  100 * worst_pair, 100 * worst_single, 100 * worst_adaptive));
+  result.notes.push_back(fmt::format(
+      "the adaptive front differs from the single one by at most {:.1f}% over the "
+      "run; from the experiment (T >= 1.2) single {:.1f}%, adaptive {:.1f}%{}",
+      100 * worst_pair, 100 * worst_single, 100 * worst_adaptive,
+      seeds == 1 ? std::string()
+                 : fmt::format(" (adaptive: medians over {} split-direction seeds; their "
+                               "spread: {:.1f}-{:.1f}% from single, particles {:.0f}-{:.0f})",
+                               seeds, 100 * *std::min_element(from_single.begin(), from_single.end()),
+                               100 * *std::max_element(from_single.begin(), from_single.end()),
+                               *std::min_element(particles.begin(), particles.end()),
+                               *std::max_element(particles.begin(), particles.end()))));
   if (memory < 4.0 || speed < 3.0 || worst_pair > 0.05)
     result.warnings.push_back(
         fmt::format("the issue's goals (4x fewer particles, 3x faster, front within 5%) are "
@@ -149,8 +209,16 @@ CaseResult run_case(double s, const std::string& tag, Json& series) {
                 fmt::format("fronts {:.1f}% (single) and {:.1f}% (adaptive) from the experiment",
                             100 * worst_single, 100 * worst_adaptive));
   result.gate.push_back(
-      {tag + "adaptive particles (mean)", GateFigure::Kind::count, std::round(adaptive.particles)});
-  result.gate.push_back({tag + "adaptive front from single", GateFigure::Kind::error, worst_pair});
+      {tag + "adaptive particles (mean)", seeds > 1 ? GateFigure::Kind::error : GateFigure::Kind::count,
+       std::round(adaptive.particles)});  // a median over seeds moves by a few: a cost, not a count
+  // The adaptive front's distance from the single one is a small difference that moves by a third
+  // between seeds (0.7-1.1% at the quick size): asserted against the 5% per seed, not gated.
+  if (seeds > 1)
+    for (int k = 0; k < seeds; ++k)
+      result.expect(from_single[k] < 0.05,
+                    fmt::format("adaptive (seed {}): front up to {:.1f}% from the single "
+                                "run's, more than the issue's 5%",
+                                1 + k, 100 * from_single[k]));
   result.gate.push_back({tag + "single front from experiment", GateFigure::Kind::error, worst_single});
   result.gate.push_back({tag + "adaptive front from experiment", GateFigure::Kind::error, worst_adaptive});
   std::vector<double> et, ez;
@@ -159,7 +227,8 @@ CaseResult run_case(double s, const std::string& tag, Json& series) {
       fmt::format("{}front Z = x/a against T = t sqrt(2g/a), {}D, s = a/{:.0f}", tag, Dim, kA / s);
   using Curve = std::tuple<const char*, const std::vector<double>*, const std::vector<double>*>;
   for (const auto& [label, x, y] :
-       {Curve{"single", &single.T, &single.Z}, Curve{"adaptive", &adaptive.T, &adaptive.Z},
+       {Curve{"single", &single.T, &single.Z},
+        Curve{seeds == 1 ? "adaptive" : "adaptive (seed 1)", &adaptive.T, &adaptive.Z},
         Curve{"Martin and Moyce 1952", &et, &ez}}) {
     Json curve = series_entry(group, label, *x, *y, "T", "Z = x / a");
     curve.set("scale", "linear");
@@ -171,15 +240,15 @@ CaseResult run_case(double s, const std::string& tag, Json& series) {
 
 CaseResult run_quick(const CaseOptions&) {
   Json series = Json::array();
-  CaseResult r = run_case<2>(kA / 20, "", series);
+  CaseResult r = run_case<2>(kA / 20, kSeeds, "", series);
   r.fields.set("series", std::move(series));
   return r;
 }
 
 CaseResult run_full(const CaseOptions&) {
   Json series = Json::array();
-  CaseResult result = run_case<2>(kA / 80, "2D ", series);
-  result.append(run_case<3>(kA / 16, "3D ", series));
+  CaseResult result = run_case<2>(kA / 80, 1, "2D ", series);
+  result.append(run_case<3>(kA / 16, 1, "3D ", series));
   result.fields.set("series", std::move(series));
   return result;
 }

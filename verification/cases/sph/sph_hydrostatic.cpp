@@ -23,9 +23,18 @@
 //   and fewer particles than single (65% of them at s = 1/50: the tank is only 25 rows deep).
 // The pressure error is reported, not asserted: with c = 10 sqrt(2 g H) a density error of 0.3%
 // is a pressure error of 0.6 rho g H, so its L-inf over particles is the density's noise magnified.
-// Gated: every measured figure.
+// Also, steadier: the rms density and pressure errors (deep particles) and the rms speed, each averaged
+// over 16 samples in the second half of the run.
+// The adaptive run is made with 5 split-direction seeds (full tier: 3), its figures the medians. A split
+// or merge decided differently changes the rest of an adaptive run, and a sum merely reordered
+// (round-off) does that as a new seed does. Measured over 20 seeds (quick tier): L-inf density error
+// 1.8e-3 to 6.2e-3 between seeds; the median of 5 moved from 2.4e-3 to 4.1e-3 between four sets of 5.
+// Gated: every figure of the single run; of the adaptive one the particles and the rms speed (medians;
+// within 2% and 4% between those sets), the others reported only.
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 
 #include <fmt/format.h>
 
@@ -38,6 +47,7 @@ namespace liquid::verification {
 namespace {
 
 constexpr double kDepth = 0.5, kGravity = 9.81, kRho = 1000.0, kSettle = 0.3;
+constexpr int kSeeds = 5;  ///< adaptive runs, one per split-direction seed (full tier: 3, longer runs)
 
 /// The volume inside the distance surface, counted on a raster of cells of side `cell`.
 template <int Dim>
@@ -63,15 +73,47 @@ double surface_volume(const sph::AdaptiveSph<Dim>& sim, double cell) {
 
 struct Outcome {
   double density = 0.0, pressure = 0.0, speed = 0.0, volume_drift = 0.0, seconds_per_step = 0.0;
+  /// Root-mean-square density and pressure errors over the deep particles and rms speed over all,
+  /// each averaged over 16 samples in the second half of the run: steadier than the L-inf figures
+  /// (see the header), and the ones the adaptive run's gate checks.
+  double rms_density = 0.0, rms_pressure = 0.0, rms_speed = 0.0;
   int particles = 0;
   std::vector<int> per_level;
   long steps = 0, split = 0, merged = 0;
   PhaseTimer timer;
 };
 
+struct Errors {
+  double density = 0.0, pressure = 0.0;  ///< L-inf
+  double rms_density = 0.0, rms_pressure = 0.0, rms_speed = 0.0;
+};
+
+/// Errors against the hydrostatic state now, over the particles deeper than their support radius.
 template <int Dim>
-Outcome run_tank(bool adaptive, double s, double end) {
+Errors errors(const sph::AdaptiveSph<Dim>& sim, double stiffness) {
+  const auto& p = sim.particles();
+  Errors e;
+  int deep = 0;
+  for (int i = 0; i < p.size(); ++i) {
+    e.rms_speed += p.v[i].squaredNorm();
+    const double y = p.x[i][1];
+    if (kDepth - y < p.radius[i]) continue;  // within a support radius of the free surface
+    const double rho_h = kRho * (1.0 + kRho * kGravity * (kDepth - y) / stiffness);
+    const double de = std::abs(p.density[i] / rho_h - 1.0),
+                 pe = std::abs(p.pressure[i] - kRho * kGravity * (kDepth - y)) / (kRho * kGravity * kDepth);
+    e.density = std::max(e.density, de), e.pressure = std::max(e.pressure, pe);
+    e.rms_density += de * de, e.rms_pressure += pe * pe, ++deep;
+  }
+  e.rms_density = std::sqrt(e.rms_density / std::max(1, deep));
+  e.rms_pressure = std::sqrt(e.rms_pressure / std::max(1, deep));
+  e.rms_speed = std::sqrt(e.rms_speed / std::max(1, p.size())) / std::sqrt(kGravity * kDepth);
+  return e;
+}
+
+template <int Dim>
+Outcome run_tank(bool adaptive, double s, double end, std::uint64_t seed) {
   sph::SphOptions<Dim> o;
+  o.seed = seed;
   o.container = Box<Dim>{Vec<Dim>::Zero(), Vec<Dim>::Ones()};
   o.spacing = s;
   o.adaptive = adaptive;
@@ -87,6 +129,7 @@ Outcome run_tank(bool adaptive, double s, double end) {
   const long steps = std::lround(end / dt);
   const double v0 = surface_volume(sim, cell);
   Outcome out;
+  int samples = 0;
   Stopwatch clock;
   double clock_seconds = 0.0;
   for (long k = 0; k < steps; ++k) {
@@ -95,23 +138,23 @@ Outcome run_tank(bool adaptive, double s, double end) {
     clock_seconds += clock.seconds();
     out.split += r.resampling.split, out.merged += r.resampling.merged;
     if (2 * k >= steps) out.speed = std::max(out.speed, r.max_speed / std::sqrt(kGravity * kDepth));
+    if (2 * k >= steps && (k + 1) % std::max<long>(1, steps / 32) == 0) {
+      const Errors e = errors(sim, o.fluid.stiffness);
+      out.rms_density += e.rms_density, out.rms_pressure += e.rms_pressure, out.rms_speed += e.rms_speed;
+      ++samples;
+    }
     if ((k + 1) % std::max<long>(1, steps / 8) == 0 || k + 1 == steps)
       out.volume_drift = std::max(out.volume_drift, std::abs(surface_volume(sim, cell) / v0 - 1.0));
   }
+  out.rms_density /= samples, out.rms_pressure /= samples, out.rms_speed /= samples;
+  const Errors last = errors(sim, o.fluid.stiffness);
+  out.density = last.density, out.pressure = last.pressure;
   out.steps = steps;
   out.seconds_per_step = clock_seconds / static_cast<double>(steps);
   const auto& p = sim.particles();
   out.particles = p.size();
   out.per_level.assign(o.max_level + 1, 0);
-  for (int i = 0; i < p.size(); ++i) {
-    ++out.per_level[p.level[i]];
-    const double y = p.x[i][1];
-    if (kDepth - y < p.radius[i]) continue;  // within a support radius of the free surface
-    const double rho_h = kRho * (1.0 + kRho * kGravity * (kDepth - y) / o.fluid.stiffness);
-    out.density = std::max(out.density, std::abs(p.density[i] / rho_h - 1.0));
-    out.pressure = std::max(
-        out.pressure, std::abs(p.pressure[i] - kRho * kGravity * (kDepth - y)) / (kRho * kGravity * kDepth));
-  }
+  for (int i = 0; i < p.size(); ++i) ++out.per_level[p.level[i]];
   out.timer = sim.timer();
   return out;
 }
@@ -124,42 +167,85 @@ CaseResult run(const CaseOptions& options) {
   Table table(fmt::format("still tank ({}D, s = {:.4g}, to t = {} s): errors against the hydrostatic state",
                           Dim, s, end),
               {"method", "particles", "per level (0, 1, 2, 3)", "of single", "steps", "s/step", "split",
-               "merged", "density err", "pressure err / (rho g H)", "speed / sqrt(gH)", "volume drift"});
+               "merged", "density err", "pressure err / (rho g H)", "speed / sqrt(gH)", "volume drift",
+               "rms density err", "rms pressure err", "rms speed"});
   Table phases("seconds per step by phase", {"method", "neighbours", "forces", "redistance", "elfs",
                                              "resample", "integrate", "collisions", "total"});
-  Outcome single;
-  for (bool adaptive : {false, true}) {
-    const Outcome r = run_tank<Dim>(adaptive, s, end);
-    if (!adaptive) single = r;
-    const std::string name = adaptive ? "adaptive" : "single";
+  // The adaptive run once per split-direction seed: one split or merge taken differently (a
+  // different seed, or the same seed with sums in another order) changes the rest of the run, so
+  // its figures are gated as medians over the seeds.
+  const int n_seeds = options.full ? 3 : kSeeds;
+  std::vector<Outcome> runs{run_tank<Dim>(false, s, end, 1)};
+  for (int k = 0; k < n_seeds; ++k) runs.push_back(run_tank<Dim>(true, s, end, 1 + k));
+  const Outcome& single = runs.front();
+  auto add_rows = [&](const std::string& name, const Outcome& r) {
     std::string levels;
     for (std::size_t l = 0; l < r.per_level.size(); ++l)
       levels += (l ? ", " : "") + std::to_string(r.per_level[l]);
     table.add_row({name, long(r.particles), levels, double(r.particles) / single.particles, r.steps,
-                   r.seconds_per_step, r.split, r.merged, r.density, r.pressure, r.speed, r.volume_drift});
+                   r.seconds_per_step, r.split, r.merged, r.density, r.pressure, r.speed, r.volume_drift,
+                   r.rms_density, r.rms_pressure, r.rms_speed});
     auto per_step = [&](const char* phase) { return r.timer.seconds(phase) / static_cast<double>(r.steps); };
     phases.add_row({name, per_step("neighbours"), per_step("forces"), per_step("redistance"),
                     per_step("elfs"), per_step("resample"), per_step("integrate"), per_step("collisions"),
                     per_step("total")});
-    result.gate.push_back({name + " density error", GateFigure::Kind::error, r.density});
-    result.gate.push_back({name + " pressure error", GateFigure::Kind::error, r.pressure});
-    result.gate.push_back({name + " spurious speed", GateFigure::Kind::error, r.speed});
-    result.gate.push_back({name + " volume drift", GateFigure::Kind::error, r.volume_drift});
-    result.gate.push_back({name + " particles", GateFigure::Kind::count, double(r.particles)});
-    const double speed_bound = adaptive ? 0.7 : 0.15, drift_bound = adaptive ? 0.15 : 0.03;
+  };
+  add_rows("single", single);
+  for (int k = 0; k < n_seeds; ++k) add_rows(fmt::format("adaptive, seed {}", 1 + k), runs[1 + k]);
+  // The adaptive figures: the median over the seeds (each figure's own median).
+  Outcome adaptive = runs[1];
+  auto median_of = [&](auto member) {
+    std::vector<double> v;
+    for (int k = 0; k < n_seeds; ++k) v.push_back(static_cast<double>(runs[1 + k].*member));
+    std::sort(v.begin(), v.end());
+    return v[v.size() / 2];
+  };
+  adaptive.density = median_of(&Outcome::density), adaptive.pressure = median_of(&Outcome::pressure);
+  adaptive.speed = median_of(&Outcome::speed), adaptive.volume_drift = median_of(&Outcome::volume_drift);
+  adaptive.particles = static_cast<int>(median_of(&Outcome::particles));
+  adaptive.split = static_cast<long>(median_of(&Outcome::split));
+  adaptive.merged = static_cast<long>(median_of(&Outcome::merged));
+  adaptive.rms_density = median_of(&Outcome::rms_density),
+  adaptive.rms_pressure = median_of(&Outcome::rms_pressure);
+  adaptive.rms_speed = median_of(&Outcome::rms_speed);
+  table.add_row({fmt::format("adaptive, median of {}", n_seeds), long(adaptive.particles), std::string("-"),
+                 double(adaptive.particles) / single.particles, adaptive.steps, std::string("-"),
+                 adaptive.split, adaptive.merged, adaptive.density, adaptive.pressure, adaptive.speed,
+                 adaptive.volume_drift, adaptive.rms_density, adaptive.rms_pressure, adaptive.rms_speed});
+  // Gated: every figure of the single run (deterministic); of the adaptive runs only the medians that
+  // stay put between sets of seeds (particles and rms speed, within 2% and 4% over four sets of 5
+  // seeds; the L-inf and rms density and pressure errors and the volume drift moved by 15-75%).
+  result.gate.push_back({"single density error", GateFigure::Kind::error, single.density});
+  result.gate.push_back({"single pressure error", GateFigure::Kind::error, single.pressure});
+  result.gate.push_back({"single spurious speed", GateFigure::Kind::error, single.speed});
+  result.gate.push_back({"single volume drift", GateFigure::Kind::error, single.volume_drift});
+  result.gate.push_back({"single particles", GateFigure::Kind::count, double(single.particles)});
+  result.gate.push_back({"single rms density error", GateFigure::Kind::error, single.rms_density});
+  result.gate.push_back({"single rms pressure error", GateFigure::Kind::error, single.rms_pressure});
+  result.gate.push_back({"single rms speed", GateFigure::Kind::error, single.rms_speed});
+  // Not a count: a median over seeds moves by a few particles (766-778), so it is checked as a cost
+  // that may not grow by more than the tolerance.
+  result.gate.push_back({"adaptive particles", GateFigure::Kind::error, double(adaptive.particles)});
+  result.gate.push_back({"adaptive rms speed", GateFigure::Kind::error, adaptive.rms_speed});
+  // Every run within the bounds (not only the medians).
+  for (std::size_t k = 0; k < runs.size(); ++k) {
+    const Outcome& r = runs[k];
+    const bool is_adaptive = k > 0;
+    const std::string name = is_adaptive ? fmt::format("adaptive (seed {})", k) : "single";
+    const double speed_bound = is_adaptive ? 0.7 : 0.15, drift_bound = is_adaptive ? 0.15 : 0.03;
     result.expect(r.speed < speed_bound,
                   fmt::format("{}: the largest speed in the second half is {:.3g} sqrt(gH), "
                               "above {}",
                               name, r.speed, speed_bound));
     result.expect(r.volume_drift < drift_bound, fmt::format("{}: the volume drifted by {:.3g}, more than {}",
                                                             name, r.volume_drift, drift_bound));
-    if (!adaptive)
+    if (!is_adaptive)
       result.expect(r.density < 0.01,
                     fmt::format("single: density error {:.3g} against the hydrostatic state", r.density));
     else
       result.expect(
           r.particles < single.particles,
-          fmt::format("adaptive: {} particles, not fewer than single's {}", r.particles, single.particles));
+          fmt::format("{}: {} particles, not fewer than single's {}", name, r.particles, single.particles));
   }
   result.notes.push_back(
       "weakly compressible: the equation of state lets the density vary by 0.5% over the depth; the "
