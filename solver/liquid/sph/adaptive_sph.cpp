@@ -307,16 +307,27 @@ bool AdaptiveSph<Dim>::lists_hold() const {
 
 template <int Dim>
 NeighbourLists AdaptiveSph<Dim>::within_support() const {
+  // Two passes over the rows (count, then fill at the counted offsets), so both run in parallel.
   const int n = p_.size();
   NeighbourLists exact;
   exact.begin.assign(n + 1, 0);
-  exact.index.reserve(nbrs_.index.size());
+  auto within = [&](int i, int j) {
+    const double r = std::max(p_.radius[i], p_.radius[j]);
+    return (p_.x[i] - p_.x[j]).squaredNorm() < r * r;
+  };
+#pragma omp parallel for schedule(static)
   for (int i = 0; i < n; ++i) {
-    for (int j : nbrs_.of(i)) {
-      const double r = std::max(p_.radius[i], p_.radius[j]);
-      if ((p_.x[i] - p_.x[j]).squaredNorm() < r * r) exact.index.push_back(j);
-    }
-    exact.begin[i + 1] = static_cast<std::int64_t>(exact.index.size());
+    std::int64_t count = 0;
+    for (int j : nbrs_.of(i)) count += within(i, j) ? 1 : 0;
+    exact.begin[i + 1] = count;
+  }
+  for (int i = 0; i < n; ++i) exact.begin[i + 1] += exact.begin[i];
+  exact.index.resize(static_cast<std::size_t>(exact.begin[n]));
+#pragma omp parallel for schedule(static)
+  for (int i = 0; i < n; ++i) {
+    std::int64_t at = exact.begin[i];
+    for (int j : nbrs_.of(i))
+      if (within(i, j)) exact.index[static_cast<std::size_t>(at++)] = j;
   }
   return exact;
 }
@@ -413,8 +424,13 @@ SphStepReport AdaptiveSph<Dim>::advance(double dt) {
   }
   {
     auto t = timer_.scope("neighbours");
-    report.searched = resampling || !lists_hold();
-    if (report.searched) find_neighbours_now(resampling);
+    // Lists that still hold serve a resampling step too (every sum skips the skin's pairs, so the
+    // results are the same to the bit); redistancing needs only the point tree at today's positions.
+    report.searched = !lists_hold();
+    if (report.searched)
+      find_neighbours_now(resampling);
+    else if (resampling)
+      tree_.build(p_.x);
   }
   report.pairs = nbrs_.n_pairs();
   {

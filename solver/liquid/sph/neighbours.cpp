@@ -1,6 +1,7 @@
 #include "liquid/sph/neighbours.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <limits>
 
 #include <nanoflann.hpp>
@@ -76,6 +77,12 @@ std::pair<int, double> PointTree<Dim>::nearest(const Vec<Dim>& x) const {
 }
 
 template <int Dim>
+std::span<const std::uint32_t> PointTree<Dim>::leaf_order() const {
+  if (!impl_->index) return {};
+  return impl_->index->vAcc;
+}
+
+template <int Dim>
 NeighbourLists find_neighbours(const PointTree<Dim>& tree, std::span<const Vec<Dim>> x,
                                std::span<const double> radius) {
   const int n = static_cast<int>(x.size());
@@ -83,34 +90,65 @@ NeighbourLists find_neighbours(const PointTree<Dim>& tree, std::span<const Vec<D
                 "find_neighbours: the tree holds {} points, the particles are {} with {} radii", tree.size(),
                 n, radius.size());
   // Each particle's own query finds the pairs within its radius; a pair beyond the smaller radius
-  // is found by the larger particle only, and is added to the smaller one's row afterwards.
-  std::vector<std::vector<std::int32_t>> rows(n);
+  // is found by the larger particle only, and is added to the smaller one's row afterwards. The hits
+  // are kept per block of particles (one buffer each, not one per particle), and every pass runs in
+  // parallel: the added pairs are counted and placed with atomic counters, then each row is sorted,
+  // so the lists do not depend on the threads' timing.
+  constexpr int kBlock = 1024;
+  const int n_blocks = (n + kBlock - 1) / kBlock;
+  std::vector<std::vector<std::int32_t>> hits_of_block(n_blocks);
+  std::vector<std::int32_t> own(n, 0), added(n, 0);
+  // Queries in the tree's leaf order: neighbouring queries walk the same nodes and points.
+  const std::span<const std::uint32_t> order = tree.leaf_order();
+  auto larger_only = [&](int i, int j) { return (x[j] - x[i]).squaredNorm() >= radius[j] * radius[j]; };
 #pragma omp parallel
   {
     std::vector<std::pair<std::uint32_t, double>> hits;
-#pragma omp for schedule(dynamic, 256)
-    for (int i = 0; i < n; ++i) {
-      tree.within(x[i], radius[i], hits);
-      auto& row = rows[i];
-      row.clear();
-      for (const auto& [j, d2] : hits)
-        if (static_cast<int>(j) != i) row.push_back(static_cast<std::int32_t>(j));
+#pragma omp for schedule(dynamic, 1)
+    for (int b = 0; b < n_blocks; ++b) {
+      auto& out = hits_of_block[b];
+      for (int k = b * kBlock; k < std::min(n, (b + 1) * kBlock); ++k) {
+        const int i = static_cast<int>(order[k]);
+        tree.within(x[i], radius[i], hits);
+        for (const auto& [j, d2] : hits)
+          if (static_cast<int>(j) != i) out.push_back(static_cast<std::int32_t>(j)), ++own[i];
+      }
+    }
+#pragma omp for schedule(dynamic, 1)
+    for (int b = 0; b < n_blocks; ++b) {
+      const std::int32_t* h = hits_of_block[b].data();
+      for (int k = b * kBlock; k < std::min(n, (b + 1) * kBlock); ++k) {
+        const int i = static_cast<int>(order[k]);
+        for (const std::int32_t* end = h + own[i]; h != end; ++h)
+          if (larger_only(i, *h))
+            std::atomic_ref<std::int32_t>(added[*h]).fetch_add(1, std::memory_order_relaxed);
+      }
     }
   }
-  std::vector<std::vector<std::int32_t>> extra(n);
-  for (int i = 0; i < n; ++i)
-    for (std::int32_t j : rows[i])
-      if ((x[j] - x[i]).squaredNorm() >= radius[j] * radius[j]) extra[j].push_back(i);
   NeighbourLists lists;
   lists.begin.assign(n + 1, 0);
-  for (int i = 0; i < n; ++i) lists.begin[i + 1] = lists.begin[i] + rows[i].size() + extra[i].size();
+  for (int i = 0; i < n; ++i) lists.begin[i + 1] = lists.begin[i] + own[i] + added[i];
   lists.index.resize(lists.begin[n]);
-#pragma omp parallel for schedule(static)
-  for (int i = 0; i < n; ++i) {
-    auto out = lists.index.begin() + lists.begin[i];
-    auto mid = std::copy(rows[i].begin(), rows[i].end(), out);
-    auto end = std::copy(extra[i].begin(), extra[i].end(), mid);
-    std::sort(out, end);
+  std::vector<std::int32_t> placed(n, 0);
+#pragma omp parallel
+  {
+#pragma omp for schedule(dynamic, 1)
+    for (int b = 0; b < n_blocks; ++b) {
+      const std::int32_t* h = hits_of_block[b].data();
+      for (int k = b * kBlock; k < std::min(n, (b + 1) * kBlock); ++k) {
+        const int i = static_cast<int>(order[k]);
+        std::copy(h, h + own[i], lists.index.begin() + lists.begin[i]);
+        for (const std::int32_t* end = h + own[i]; h != end; ++h)
+          if (larger_only(i, *h)) {
+            const std::int32_t slot =
+                std::atomic_ref<std::int32_t>(placed[*h]).fetch_add(1, std::memory_order_relaxed);
+            lists.index[lists.begin[*h] + own[*h] + slot] = i;
+          }
+      }
+    }
+#pragma omp for schedule(static)
+    for (int i = 0; i < n; ++i)
+      std::sort(lists.index.begin() + lists.begin[i], lists.index.begin() + lists.begin[i + 1]);
   }
   return lists;
 }

@@ -31,6 +31,9 @@ class PointTree {
   void within(const Vec<Dim>& x, double radius, std::vector<std::pair<std::uint32_t, double>>& out) const;
   /// The index of the point nearest x and its distance; (-1, inf) for an empty tree.
   std::pair<int, double> nearest(const Vec<Dim>& x) const;
+  /// Every point's index, in the order of the tree's leaves: points that follow each other are close
+  /// in space, so queries made in this order find the tree's nodes and the points still in cache.
+  std::span<const std::uint32_t> leaf_order() const;
 
  private:
   struct Impl;
