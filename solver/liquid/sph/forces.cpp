@@ -33,6 +33,30 @@ bool within_support(const SphParticles<Dim>& p, int i, int j, double distance_sq
   const double r = std::max(p.radius[i], p.radius[j]);
   return distance_squared < r * r;
 }
+
+/// The pressure kernel's gradient at offset x with q = |x| given: the loops below take the square
+/// root once per pair (x.norm() is the square root of the same squared norm, so the bits agree).
+template <int Dim>
+inline Vec<Dim> pressure_gradient(const FluidConstants& fluid, const Vec<Dim>& x, double q, double r) {
+  return fluid.kernels == KernelSet::wendland ? Kernels<Dim>::wendland_gradient(x, q, r)
+                                              : Kernels<Dim>::spiky_gradient(x, q, r);
+}
+
+/// pair_force with x_ij and |x_ij| given.
+template <int Dim>
+inline Vec<Dim> pair_force_at(const SphParticles<Dim>& p, int i, int j, const FluidConstants& fluid,
+                              const Vec<Dim>& xij, double q) {
+  using K = Kernels<Dim>;
+  const double vv = (p.mass[i] / p.density[i]) * (p.mass[j] / p.density[j]);
+  const Vec<Dim> grad = 0.5 * (pressure_gradient<Dim>(fluid, xij, q, p.radius[i]) +
+                               pressure_gradient<Dim>(fluid, xij, q, p.radius[j]));
+  const double lap = 0.5 * (K::viscosity_laplacian(q, p.radius[i]) + K::viscosity_laplacian(q, p.radius[j]));
+  const double pressure = fluid.pressure_form == PressureForm::paper
+                              ? vv * (p.pressure[i] + p.pressure[j])
+                              : (p.mass[i] * p.mass[j]) * (p.pressure[i] / (p.density[i] * p.density[i]) +
+                                                           p.pressure[j] / (p.density[j] * p.density[j]));
+  return -pressure * grad + (fluid.viscosity * vv * lap) * (p.v[j] - p.v[i]);
+}
 }  // namespace
 
 template <int Dim>
@@ -95,9 +119,11 @@ void compute_density_rate(SphParticles<Dim>& p, const NeighbourLists& nbrs, cons
     double rate = 0.0;
     for (int j : nbrs.of(i)) {
       const Vec<Dim> xij = p.x[i] - p.x[j];
-      if (!within_support(p, i, j, xij.squaredNorm())) continue;
-      const Vec<Dim> grad = 0.5 * (pressure_kernel_gradient<Dim>(fluid, xij, p.radius[i]) +
-                                   pressure_kernel_gradient<Dim>(fluid, xij, p.radius[j]));
+      const double q2 = xij.squaredNorm();
+      if (!within_support(p, i, j, q2)) continue;
+      const double q = std::sqrt(q2);
+      const Vec<Dim> grad = 0.5 * (pressure_gradient<Dim>(fluid, xij, q, p.radius[i]) +
+                                   pressure_gradient<Dim>(fluid, xij, q, p.radius[j]));
       rate += p.mass[j] * (p.v[i] - p.v[j]).dot(grad);
       if (fluid.density_diffusion > 0.0) {
         // delta h c sum_j V_j 2 (rho_j - rho_i - hydrostatic part) (x_ji . grad_i W) / |x_ij|^2, with h
@@ -118,18 +144,8 @@ void compute_density_rate(SphParticles<Dim>& p, const NeighbourLists& nbrs, cons
 
 template <int Dim>
 Vec<Dim> pair_force(const SphParticles<Dim>& p, int i, int j, const FluidConstants& fluid) {
-  using K = Kernels<Dim>;
   const Vec<Dim> xij = p.x[i] - p.x[j];
-  const double q = xij.norm();
-  const double vv = (p.mass[i] / p.density[i]) * (p.mass[j] / p.density[j]);
-  const Vec<Dim> grad = 0.5 * (pressure_kernel_gradient<Dim>(fluid, xij, p.radius[i]) +
-                               pressure_kernel_gradient<Dim>(fluid, xij, p.radius[j]));
-  const double lap = 0.5 * (K::viscosity_laplacian(q, p.radius[i]) + K::viscosity_laplacian(q, p.radius[j]));
-  const double pressure = fluid.pressure_form == PressureForm::paper
-                              ? vv * (p.pressure[i] + p.pressure[j])
-                              : (p.mass[i] * p.mass[j]) * (p.pressure[i] / (p.density[i] * p.density[i]) +
-                                                           p.pressure[j] / (p.density[j] * p.density[j]));
-  return -pressure * grad + (fluid.viscosity * vv * lap) * (p.v[j] - p.v[i]);
+  return pair_force_at<Dim>(p, i, j, fluid, xij, xij.norm());
 }
 
 template <int Dim>
@@ -139,8 +155,11 @@ void compute_accelerations(SphParticles<Dim>& p, const NeighbourLists& nbrs, con
 #pragma omp parallel for schedule(static)
   for (int i = 0; i < n; ++i) {
     Vec<Dim> f = Vec<Dim>::Zero();
-    for (int j : nbrs.of(i))
-      if (within_support(p, i, j, (p.x[i] - p.x[j]).squaredNorm())) f += pair_force(p, i, j, fluid);
+    for (int j : nbrs.of(i)) {
+      const Vec<Dim> xij = p.x[i] - p.x[j];
+      const double q2 = xij.squaredNorm();
+      if (within_support(p, i, j, q2)) f += pair_force_at<Dim>(p, i, j, fluid, xij, std::sqrt(q2));
+    }
     p.a[i] = f / p.mass[i] + gravity;
     if (walls && p.pressure[i] != 0.0)
       p.a[i] -= (p.pressure[i] * fluid.rest_density / (p.density[i] * p.density[i])) *

@@ -47,8 +47,9 @@ struct Kernels {
   }
 
   /// The gradient of the spiky kernel with respect to x, at offset x (zero at x = 0 and beyond r).
-  static Vec<Dim> spiky_gradient(const Vec<Dim>& x, double r) {
-    const double q = x.norm();
+  static Vec<Dim> spiky_gradient(const Vec<Dim>& x, double r) { return spiky_gradient(x, x.norm(), r); }
+  /// The same with q = |x| given (the force loops compute it once per pair).
+  static Vec<Dim> spiky_gradient(const Vec<Dim>& x, double q, double r) {
     if (q >= r || q == 0.0) return Vec<Dim>::Zero();
     const double c = Dim == 3 ? 45.0 / (pi * ipow<6>(r)) : 30.0 / (pi * ipow<5>(r));
     const double s = r - q;
@@ -77,8 +78,9 @@ struct Kernels {
     const double t = 1.0 - q / r;
     return c * ipow<4>(t) * (1.0 + 4.0 * q / r);
   }
-  static Vec<Dim> wendland_gradient(const Vec<Dim>& x, double r) {
-    const double q = x.norm();
+  static Vec<Dim> wendland_gradient(const Vec<Dim>& x, double r) { return wendland_gradient(x, x.norm(), r); }
+  /// The same with q = |x| given.
+  static Vec<Dim> wendland_gradient(const Vec<Dim>& x, double q, double r) {
     if (q >= r) return Vec<Dim>::Zero();
     const double c = Dim == 3 ? 21.0 / (2.0 * pi * r * r * r) : 7.0 / (pi * r * r);
     const double t = 1.0 - q / r;
