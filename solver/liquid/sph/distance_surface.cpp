@@ -189,17 +189,20 @@ RedistanceStats redistance(SphParticles<Dim>& p, const NeighbourLists& nbrs, con
       }
     }
   }
+  long unreached = 0, propagated = 0;
+#pragma omp parallel for schedule(static) reduction(+ : unreached, propagated)
   for (int i = 0; i < n; ++i) {
     if (source[i] < 0) {
-      ++stats.unreached;
+      ++unreached;
       continue;
     }
-    if (!on_surface[i]) ++stats.propagated;
+    if (!on_surface[i]) ++propagated;
     p.distance[i] = dist[i];
     p.foot[i] = source[i] == i ? centre[i]
                                : closest_on_disk<Dim>(p.x[i], centre[source[i]], normal[source[i]],
                                                       disk * p.radius[source[i]]);
   }
+  stats.unreached = unreached, stats.propagated = propagated;
   return stats;
 }
 

@@ -52,10 +52,13 @@ FeatureStats feature_size(SphParticles<Dim>& p, const NeighbourLists& nbrs, doub
   std::fill(p.elfs.begin(), p.elfs.end(), SphParticles<Dim>::infinity);
   using Item = std::pair<double, int>;
   std::priority_queue<Item, std::vector<Item>, std::greater<>> queue;
+  // The nearest medial particle of each footpoint (in parallel), then the march (serial).
+#pragma omp parallel for schedule(dynamic, 256)
+  for (int i = 0; i < n; ++i)
+    if ((p.x[i] - p.foot[i]).norm() < p.radius[i]) lfs[i] = axis_tree.nearest(p.foot[i]).second;
   for (int i = 0; i < n; ++i) {
     const double d = (p.x[i] - p.foot[i]).norm();
     if (!(d < p.radius[i])) continue;
-    lfs[i] = axis_tree.nearest(p.foot[i]).second;
     source[i] = p.foot[i];
     p.elfs[i] = d + lfs[i];
     queue.push({p.elfs[i], i});
