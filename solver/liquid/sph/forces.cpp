@@ -1,6 +1,7 @@
 #include "liquid/sph/forces.hpp"
 
 #include <cmath>
+#include <vector>
 
 #include "liquid/core/error.hpp"
 #include "liquid/sph/kernels.hpp"
@@ -34,23 +35,50 @@ bool within_support(const SphParticles<Dim>& p, int i, int j, double distance_sq
   return distance_squared < r * r;
 }
 
-/// The pressure kernel's gradient at offset x with q = |x| given: the loops below take the square
-/// root once per pair (x.norm() is the square root of the same squared norm, so the bits agree).
+/// What every pair of particle i reads of it besides its state: its volume m_i / rho_i and the
+/// constants of its kernels at r_i, computed once per particle rather than once per pair (the same
+/// expressions, so the same bits).
+struct PairTerms {
+  double volume = 0.0, gradient_c = 0.0, laplacian_c = 0.0;
+};
+
 template <int Dim>
-inline Vec<Dim> pressure_gradient(const FluidConstants& fluid, const Vec<Dim>& x, double q, double r) {
-  return fluid.kernels == KernelSet::wendland ? Kernels<Dim>::wendland_gradient(x, q, r)
-                                              : Kernels<Dim>::spiky_gradient(x, q, r);
+PairTerms pair_terms(const SphParticles<Dim>& p, int i, const FluidConstants& fluid) {
+  using K = Kernels<Dim>;
+  const double r = p.radius[i];
+  return {p.mass[i] / p.density[i],
+          fluid.kernels == KernelSet::wendland ? K::wendland_constant(r) : K::spiky_gradient_constant(r),
+          K::viscosity_laplacian_constant(r)};
 }
 
-/// pair_force with x_ij and |x_ij| given.
+template <int Dim>
+std::vector<PairTerms> all_pair_terms(const SphParticles<Dim>& p, const FluidConstants& fluid) {
+  std::vector<PairTerms> terms(p.size());
+#pragma omp parallel for schedule(static)
+  for (int i = 0; i < p.size(); ++i) terms[i] = pair_terms(p, i, fluid);
+  return terms;
+}
+
+/// The pressure kernel's gradient at offset x, with q = |x| (the loops below take the square root
+/// once per pair: x.norm() is the square root of the same squared norm, so the bits agree) and the
+/// kernel's constant c at r given.
+template <int Dim>
+inline Vec<Dim> pressure_gradient(const FluidConstants& fluid, const Vec<Dim>& x, double q, double r,
+                                  double c) {
+  return fluid.kernels == KernelSet::wendland ? Kernels<Dim>::wendland_gradient(x, q, r, c)
+                                              : Kernels<Dim>::spiky_gradient(x, q, r, c);
+}
+
+/// pair_force with x_ij, |x_ij| and both particles' terms given.
 template <int Dim>
 inline Vec<Dim> pair_force_at(const SphParticles<Dim>& p, int i, int j, const FluidConstants& fluid,
-                              const Vec<Dim>& xij, double q) {
+                              const Vec<Dim>& xij, double q, const PairTerms& ti, const PairTerms& tj) {
   using K = Kernels<Dim>;
-  const double vv = (p.mass[i] / p.density[i]) * (p.mass[j] / p.density[j]);
-  const Vec<Dim> grad = 0.5 * (pressure_gradient<Dim>(fluid, xij, q, p.radius[i]) +
-                               pressure_gradient<Dim>(fluid, xij, q, p.radius[j]));
-  const double lap = 0.5 * (K::viscosity_laplacian(q, p.radius[i]) + K::viscosity_laplacian(q, p.radius[j]));
+  const double vv = ti.volume * tj.volume;
+  const Vec<Dim> grad = 0.5 * (pressure_gradient<Dim>(fluid, xij, q, p.radius[i], ti.gradient_c) +
+                               pressure_gradient<Dim>(fluid, xij, q, p.radius[j], tj.gradient_c));
+  const double lap = 0.5 * (K::viscosity_laplacian(q, p.radius[i], ti.laplacian_c) +
+                            K::viscosity_laplacian(q, p.radius[j], tj.laplacian_c));
   const double pressure = fluid.pressure_form == PressureForm::paper
                               ? vv * (p.pressure[i] + p.pressure[j])
                               : (p.mass[i] * p.mass[j]) * (p.pressure[i] / (p.density[i] * p.density[i]) +
@@ -114,6 +142,7 @@ void compute_density_rate(SphParticles<Dim>& p, const NeighbourLists& nbrs, cons
   const int n = p.size();
   const double c = std::sqrt(fluid.stiffness / fluid.rest_density);
   const double hydrostatic = fluid.rest_density * fluid.rest_density / fluid.stiffness;
+  const std::vector<PairTerms> terms = all_pair_terms(p, fluid);
 #pragma omp parallel for schedule(static)
   for (int i = 0; i < n; ++i) {
     double rate = 0.0;
@@ -122,8 +151,8 @@ void compute_density_rate(SphParticles<Dim>& p, const NeighbourLists& nbrs, cons
       const double q2 = xij.squaredNorm();
       if (!within_support(p, i, j, q2)) continue;
       const double q = std::sqrt(q2);
-      const Vec<Dim> grad = 0.5 * (pressure_gradient<Dim>(fluid, xij, q, p.radius[i]) +
-                                   pressure_gradient<Dim>(fluid, xij, q, p.radius[j]));
+      const Vec<Dim> grad = 0.5 * (pressure_gradient<Dim>(fluid, xij, q, p.radius[i], terms[i].gradient_c) +
+                                   pressure_gradient<Dim>(fluid, xij, q, p.radius[j], terms[j].gradient_c));
       rate += p.mass[j] * (p.v[i] - p.v[j]).dot(grad);
       if (fluid.density_diffusion > 0.0) {
         // delta h c sum_j V_j 2 (rho_j - rho_i - hydrostatic part) (x_ji . grad_i W) / |x_ij|^2, with h
@@ -132,7 +161,7 @@ void compute_density_rate(SphParticles<Dim>& p, const NeighbourLists& nbrs, cons
         const double h = 0.25 * (p.radius[i] + p.radius[j]);
         const double jump = p.density[j] - p.density[i] + hydrostatic * gravity.dot(xij);
         // (+ (0.1 h)^2 below: two particles clamped into the same corner by the walls sit on one point.)
-        rate += fluid.density_diffusion * h * c * (p.mass[j] / p.density[j]) * 2.0 * jump * (-xij.dot(grad)) /
+        rate += fluid.density_diffusion * h * c * terms[j].volume * 2.0 * jump * (-xij.dot(grad)) /
                 (xij.squaredNorm() + 0.01 * h * h);
       }
     }
@@ -145,20 +174,23 @@ void compute_density_rate(SphParticles<Dim>& p, const NeighbourLists& nbrs, cons
 template <int Dim>
 Vec<Dim> pair_force(const SphParticles<Dim>& p, int i, int j, const FluidConstants& fluid) {
   const Vec<Dim> xij = p.x[i] - p.x[j];
-  return pair_force_at<Dim>(p, i, j, fluid, xij, xij.norm());
+  return pair_force_at<Dim>(p, i, j, fluid, xij, xij.norm(), pair_terms(p, i, fluid),
+                            pair_terms(p, j, fluid));
 }
 
 template <int Dim>
 void compute_accelerations(SphParticles<Dim>& p, const NeighbourLists& nbrs, const FluidConstants& fluid,
                            const Vec<Dim>& gravity, const Boundary<Dim>* walls) {
   const int n = p.size();
+  const std::vector<PairTerms> terms = all_pair_terms(p, fluid);
 #pragma omp parallel for schedule(static)
   for (int i = 0; i < n; ++i) {
     Vec<Dim> f = Vec<Dim>::Zero();
     for (int j : nbrs.of(i)) {
       const Vec<Dim> xij = p.x[i] - p.x[j];
       const double q2 = xij.squaredNorm();
-      if (within_support(p, i, j, q2)) f += pair_force_at<Dim>(p, i, j, fluid, xij, std::sqrt(q2));
+      if (within_support(p, i, j, q2))
+        f += pair_force_at<Dim>(p, i, j, fluid, xij, std::sqrt(q2), terms[i], terms[j]);
     }
     p.a[i] = f / p.mass[i] + gravity;
     if (walls && p.pressure[i] != 0.0)

@@ -47,11 +47,13 @@ struct Kernels {
   }
 
   /// The gradient of the spiky kernel with respect to x, at offset x (zero at x = 0 and beyond r).
-  static Vec<Dim> spiky_gradient(const Vec<Dim>& x, double r) { return spiky_gradient(x, x.norm(), r); }
-  /// The same with q = |x| given (the force loops compute it once per pair).
-  static Vec<Dim> spiky_gradient(const Vec<Dim>& x, double q, double r) {
+  static Vec<Dim> spiky_gradient(const Vec<Dim>& x, double r) {
+    return spiky_gradient(x, x.norm(), r, spiky_gradient_constant(r));
+  }
+  /// The same with q = |x| and the constant c = spiky_gradient_constant(r) given (the force loops
+  /// take the square root once per pair and keep c per particle).
+  static Vec<Dim> spiky_gradient(const Vec<Dim>& x, double q, double r, double c) {
     if (q >= r || q == 0.0) return Vec<Dim>::Zero();
-    const double c = Dim == 3 ? 45.0 / (pi * ipow<6>(r)) : 30.0 / (pi * ipow<5>(r));
     const double s = r - q;
     return (-c * s * s / q) * x;
   }
@@ -74,23 +76,39 @@ struct Kernels {
   /// instability.
   static double wendland(double q, double r) {
     if (q >= r) return 0.0;
-    const double c = Dim == 3 ? 21.0 / (2.0 * pi * r * r * r) : 7.0 / (pi * r * r);
+    const double c = wendland_constant(r);
     const double t = 1.0 - q / r;
     return c * ipow<4>(t) * (1.0 + 4.0 * q / r);
   }
-  static Vec<Dim> wendland_gradient(const Vec<Dim>& x, double r) { return wendland_gradient(x, x.norm(), r); }
-  /// The same with q = |x| given.
-  static Vec<Dim> wendland_gradient(const Vec<Dim>& x, double q, double r) {
+  static Vec<Dim> wendland_gradient(const Vec<Dim>& x, double r) {
+    return wendland_gradient(x, x.norm(), r, wendland_constant(r));
+  }
+  /// The same with q = |x| and c = wendland_constant(r) given.
+  static Vec<Dim> wendland_gradient(const Vec<Dim>& x, double q, double r, double c) {
     if (q >= r) return Vec<Dim>::Zero();
-    const double c = Dim == 3 ? 21.0 / (2.0 * pi * r * r * r) : 7.0 / (pi * r * r);
     const double t = 1.0 - q / r;
     return (-20.0 * c * ipow<3>(t) / (r * r)) * x;  // dW/dq = -20 c (q / r^2) (1 - q/r)^3
   }
 
   static double viscosity_laplacian(double q, double r) {
+    return viscosity_laplacian(q, r, viscosity_laplacian_constant(r));
+  }
+  /// The same with c = viscosity_laplacian_constant(r) given.
+  static double viscosity_laplacian(double q, double r, double c) {
     if (q >= r) return 0.0;
-    const double c = Dim == 3 ? 45.0 / (pi * ipow<6>(r)) : 40.0 / (pi * ipow<5>(r));
     return c * (r - q);
+  }
+
+  /// The normalising constants of the Wendland kernel, the spiky gradient and the viscosity
+  /// Laplacian at support r.
+  static double wendland_constant(double r) {
+    return Dim == 3 ? 21.0 / (2.0 * pi * r * r * r) : 7.0 / (pi * r * r);
+  }
+  static double spiky_gradient_constant(double r) {
+    return Dim == 3 ? 45.0 / (pi * ipow<6>(r)) : 30.0 / (pi * ipow<5>(r));
+  }
+  static double viscosity_laplacian_constant(double r) {
+    return Dim == 3 ? 45.0 / (pi * ipow<6>(r)) : 40.0 / (pi * ipow<5>(r));
   }
 };
 
