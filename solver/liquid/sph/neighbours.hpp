@@ -73,7 +73,9 @@ NeighbourLists find_neighbours_cells(std::span<const Vec<Dim>> x, std::span<cons
 /// the tree's 179 (the same ratio as the single-width list's), one level 10-15% slower than it.
 /// Nor were per-radius grids (each radius its own cells as wide as itself, each particle scanning
 /// every grid within max(r_i, r_grid), cells culled by their distance): the same lists in the same
-/// time within this machine's noise (3D, 100k, three levels: 146-169 ms against 144-167).
+/// time within this machine's noise (3D, 100k, three levels: 146-169 ms against 144-167). These
+/// figures predate the k-d search in leaf order with per-block buffers (README: neighbours 0.160 to
+/// 0.100 s a step on an adaptive 3D dam break); the choice has not been re-measured since.
 enum class NeighbourSearch { automatic, cell_list, kd_tree };
 const char* to_string(NeighbourSearch search);
 
