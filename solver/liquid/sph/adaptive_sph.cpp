@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <sstream>
 
@@ -295,14 +296,20 @@ void AdaptiveSph<Dim>::find_neighbours_now(bool with_tree) {
 }
 
 template <int Dim>
-bool AdaptiveSph<Dim>::lists_hold() const {
+double AdaptiveSph<Dim>::skin_used() const {
   const int n = p_.size();
-  if (options_.neighbour_skin <= 0.0 || static_cast<int>(built_at_.size()) != n) return false;
+  if (options_.neighbour_skin <= 0.0 || static_cast<int>(built_at_.size()) != n)
+    return std::numeric_limits<double>::infinity();
   const double half = 0.5 * options_.neighbour_skin * options_.spacing;
   double moved = 0.0;
 #pragma omp parallel for schedule(static) reduction(max : moved)
   for (int i = 0; i < n; ++i) moved = std::max(moved, (p_.x[i] - built_at_[i]).squaredNorm());
-  return moved < half * half;
+  return std::sqrt(moved) / half;
+}
+
+template <int Dim>
+bool AdaptiveSph<Dim>::lists_hold() const {
+  return skin_used() < 1.0;
 }
 
 template <int Dim>
@@ -337,7 +344,10 @@ SphStepReport AdaptiveSph<Dim>::adapt_now() {
   SphStepReport report;
   {
     auto t = timer_.scope("neighbours");
-    find_neighbours_now(true);
+    if (lists_hold())
+      tree_.build(p_.x);
+    else
+      find_neighbours_now(true);
   }
   redistance_and_resample(report);
   report.particles = p_.size();
@@ -368,10 +378,96 @@ void AdaptiveSph<Dim>::redistance_and_resample(SphStepReport& report) {
       for (int i = 0; i < n; ++i) p_.elfs[i] += options_.view.distance(p_.x[i]);
     }
   }
-  auto t = timer_.scope("resample");
-  const SolidTest<Dim> solid = [this](const Vec<Dim>& x) { return in_solid(x); };
-  report.resampling = resample<Dim>(p_, exact, sizes_, options_.resampling, solid, rng_);
-  if (report.resampling.split + report.resampling.merged > 0) built_at_.clear();
+  // Patching pays only when the lists have most of their life left: with more than half the skin
+  // used they would be found again within a step or two anyway.
+  const bool patch = options_.neighbour_skin > 0.0 && options_.patch_lists && skin_used() < 0.5;
+  std::vector<std::int32_t> origin;
+  {
+    auto t = timer_.scope("resample");
+    const SolidTest<Dim> solid = [this](const Vec<Dim>& x) { return in_solid(x); };
+    report.resampling = resample<Dim>(p_, exact, sizes_, options_.resampling, solid, rng_, &origin);
+  }
+  if (report.resampling.split + report.resampling.merged == 0) return;
+  if (patch) {
+    auto t = timer_.scope("neighbours");
+    patch_lists(origin);
+  } else {
+    built_at_.clear();
+  }
+}
+
+template <int Dim>
+void AdaptiveSph<Dim>::patch_lists(const std::vector<std::int32_t>& origin) {
+  // Kept lists hold every pair within max(r_i, r_j) + skin at the built positions, and stay valid
+  // while no particle has moved half the skin from its own. Survivors keep their built positions
+  // and rows (renumbered, removed particles dropped). A new particle is built where it is born,
+  // with every pair within max(r_i, r_j) + skin between its position and the others' built
+  // positions: at any later time both have moved less than half the skin, so a pair within
+  // max(r_i, r_j) then is in the list. The results are those of a new search, to the bit.
+  const int n = p_.size(), n_old = nbrs_.n_particles();
+  const double skin = options_.neighbour_skin * options_.spacing;
+  std::vector<std::int32_t> renumber(n_old, -1);
+  std::vector<Vec<Dim>> built(n);
+  std::vector<std::int32_t> born;
+  std::vector<char> is_born(n, 0);
+  double max_reach = 0.0;
+  for (int k = 0; k < n; ++k) {
+    if (origin[k] >= 0) {
+      renumber[origin[k]] = k, built[k] = built_at_[origin[k]];
+    } else {
+      built[k] = p_.x[k], is_born[k] = 1;
+      born.push_back(k);
+    }
+    max_reach = std::max(max_reach, p_.radius[k] + skin);
+  }
+  // The new particles' pairs, each found once: from the new particle's side, or from the lower
+  // index's when both are new.
+  const PointTree<Dim> tree(built);
+  std::vector<std::vector<std::int32_t>> partners(born.size());
+#pragma omp parallel
+  {
+    std::vector<std::pair<std::uint32_t, double>> hits;
+#pragma omp for schedule(dynamic, 64)
+    for (int b = 0; b < static_cast<int>(born.size()); ++b) {
+      const int k = born[b];
+      tree.within(built[k], max_reach, hits);
+      for (const auto& [j, d2] : hits) {
+        if (static_cast<int>(j) == k || (is_born[j] && static_cast<int>(j) < k)) continue;
+        const double reach = std::max(p_.radius[k], p_.radius[j]) + skin;
+        if ((built[k] - built[j]).squaredNorm() < reach * reach)
+          partners[b].push_back(static_cast<std::int32_t>(j));
+      }
+    }
+  }
+  NeighbourLists lists;
+  lists.begin.assign(n + 1, 0);
+#pragma omp parallel for schedule(static)
+  for (int k = 0; k < n; ++k) {
+    std::int64_t kept = 0;
+    if (origin[k] >= 0)
+      for (int j : nbrs_.of(origin[k])) kept += renumber[j] >= 0 ? 1 : 0;
+    lists.begin[k + 1] = kept;
+  }
+  for (std::size_t b = 0; b < born.size(); ++b)
+    for (std::int32_t j : partners[b]) ++lists.begin[born[b] + 1], ++lists.begin[j + 1];
+  for (int k = 0; k < n; ++k) lists.begin[k + 1] += lists.begin[k];
+  lists.index.resize(static_cast<std::size_t>(lists.begin[n]));
+  std::vector<std::int64_t> at(lists.begin.begin(), lists.begin.end() - 1);
+#pragma omp parallel for schedule(static)
+  for (int k = 0; k < n; ++k)
+    if (origin[k] >= 0)
+      for (int j : nbrs_.of(origin[k]))
+        if (renumber[j] >= 0) lists.index[static_cast<std::size_t>(at[k]++)] = renumber[j];
+  for (std::size_t b = 0; b < born.size(); ++b)
+    for (std::int32_t j : partners[b]) {
+      lists.index[static_cast<std::size_t>(at[born[b]]++)] = j;
+      lists.index[static_cast<std::size_t>(at[j]++)] = born[b];
+    }
+#pragma omp parallel for schedule(static)
+  for (int k = 0; k < n; ++k)
+    std::sort(lists.index.begin() + lists.begin[k], lists.index.begin() + lists.begin[k + 1]);
+  nbrs_ = std::move(lists);
+  built_at_ = std::move(built);
 }
 
 template <int Dim>

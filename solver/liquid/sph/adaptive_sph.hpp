@@ -110,10 +110,14 @@ struct SphOptions {
   /// How the neighbour lists are found; the k-d tree is built on redistancing steps either way.
   NeighbourSearch search = NeighbourSearch::automatic;
   /// Verlet skin, in level-0 spacings: the lists hold the pairs within max(r_i, r_j) + skin and are
-  /// kept until a particle has moved half the skin, the particles change (a resampling that split or
-  /// merged, a source) or a redistancing step comes. The sums skip pairs beyond their support, so
-  /// the results are the same to the bit as with lists found every step (skin 0).
+  /// kept until a particle has moved half the skin or a source adds particles (a redistancing step
+  /// rebuilds only the point tree). The sums skip pairs beyond their support, so the results are the
+  /// same to the bit as with lists found every step (skin 0).
   double neighbour_skin = 0.2;
+  /// After a resampling that split or merged: true, the kept lists are patched (the new particles'
+  /// pairs found around them) while less than half their skin is used; false, or later, they are
+  /// found again by a whole search. Same bits either way.
+  bool patch_lists = true;
   double restitution = 0.0;  ///< normal velocity kept (reversed) at a wall
   std::uint64_t seed = 1;    ///< the split directions' random stream
   std::vector<SphSource<Dim>> sources;
@@ -201,10 +205,17 @@ class AdaptiveSph {
 
  private:
   void find_neighbours_now(bool with_tree);
+  /// The largest move since the lists were built, in half skins (infinite: no lists for these
+  /// particles).
+  double skin_used() const;
   /// True when nbrs_ still holds every pair within reach: the same particles, none moved half the skin.
   bool lists_hold() const;
   /// nbrs_ without the skin's pairs (what redistancing, elfs and resampling read).
   NeighbourLists within_support() const;
+  /// After splits and merges (`origin`: each particle's index before them, -1 if new), keeps the
+  /// lists instead of searching again: survivors keep their rows and built positions, and the new
+  /// particles' pairs are found around them.
+  void patch_lists(const std::vector<std::int32_t>& origin);
   void collide();
   /// The sources' phase: imposed velocities, then new particles; returns how many were added.
   int apply_sources();

@@ -199,9 +199,14 @@ struct Pass {
     return false;
   }
 
-  ResampleStats finish() {
+  ResampleStats finish(std::vector<std::int32_t>* origin = nullptr) {
     std::vector<char> alive(p.size(), 1);
     for (int i = 0; i < n_old; ++i) alive[i] = !removed[i];
+    if (origin) {
+      origin->clear();
+      for (int i = 0; i < p.size(); ++i)
+        if (alive[i]) origin->push_back(i < n_old ? i : -1);
+    }
     p.keep(alive);
     return stats;
   }
@@ -232,7 +237,8 @@ ResampleStats merge_marked(SphParticles<Dim>& p, const NeighbourLists& nbrs, con
 
 template <int Dim>
 ResampleStats resample(SphParticles<Dim>& p, const NeighbourLists& nbrs, const Sizes& sizes,
-                       const ResampleOptions& options, const SolidTest<Dim>& solid, std::mt19937_64& rng) {
+                       const ResampleOptions& options, const SolidTest<Dim>& solid, std::mt19937_64& rng,
+                       std::vector<std::int32_t>* origin) {
   LIQUID_VERIFY(options.alpha > 0.0 && options.beta > options.alpha,
                 "resample: alpha = {} and beta = {} must satisfy 0 < alpha < beta", options.alpha,
                 options.beta);
@@ -246,13 +252,15 @@ ResampleStats resample(SphParticles<Dim>& p, const NeighbourLists& nbrs, const S
     if (p.level[i] > 0 && p.elfs[i] < options.alpha * p.radius[i]) pass.split(i, base, rng);
   for (int i = 0; i < n; ++i)
     if (to_merge[i] && !pass.removed[i] && !pass.merge(i, to_merge)) ++pass.stats.merge_skipped;
-  return pass.finish();
+  return pass.finish(origin);
 }
 
 template ResampleStats resample<2>(SphParticles<2>&, const NeighbourLists&, const Sizes&,
-                                   const ResampleOptions&, const SolidTest<2>&, std::mt19937_64&);
+                                   const ResampleOptions&, const SolidTest<2>&, std::mt19937_64&,
+                                   std::vector<std::int32_t>*);
 template ResampleStats resample<3>(SphParticles<3>&, const NeighbourLists&, const Sizes&,
-                                   const ResampleOptions&, const SolidTest<3>&, std::mt19937_64&);
+                                   const ResampleOptions&, const SolidTest<3>&, std::mt19937_64&,
+                                   std::vector<std::int32_t>*);
 template ResampleStats split_marked<2>(SphParticles<2>&, const NeighbourLists&, const Sizes&,
                                        const std::vector<char>&, const SolidTest<2>&, std::mt19937_64&);
 template ResampleStats split_marked<3>(SphParticles<3>&, const NeighbourLists&, const Sizes&,

@@ -60,10 +60,13 @@ template <int Dim>
 using SolidTest = std::function<bool(const Vec<Dim>&)>;
 
 /// Splits and merges by p.elfs (and p.foot for the tangent-plane test); `nbrs` are the lists of the
-/// current positions. New particles are appended, replaced ones removed: indices change.
+/// current positions. New particles are appended, replaced ones removed: indices change. `origin`,
+/// when given, receives for each particle after the pass its index before it, or -1 for a particle
+/// the pass made.
 template <int Dim>
 ResampleStats resample(SphParticles<Dim>& p, const NeighbourLists& nbrs, const Sizes& sizes,
-                       const ResampleOptions& options, const SolidTest<Dim>& solid, std::mt19937_64& rng);
+                       const ResampleOptions& options, const SolidTest<Dim>& solid, std::mt19937_64& rng,
+                       std::vector<std::int32_t>* origin = nullptr);
 
 /// Splits particle-by-particle regardless of elfs (for tests and cases): every particle whose flag is
 /// set and whose level is above 0; the same placement rules as resample().

@@ -406,8 +406,10 @@ template <int Dim>
 void skin_changes_nothing() {
   // A collapsing column, adaptive, 60 steps: lists kept between steps (the skin) against lists found
   // every step. The state must agree to the bit, and the skin must have saved searches.
-  const auto run = [](double skin, long& searches) {
+  long changes = 0;  // splits and merges over the runs
+  const auto run = [&changes](double skin, long& searches, bool patch = true) {
     SphOptions<Dim> o;
+    o.patch_lists = patch;
     Vec<Dim> hi = Vec<Dim>::Constant(0.3);
     hi[0] = 0.6;
     o.container = Box<Dim>{Vec<Dim>::Zero(), hi};
@@ -424,7 +426,11 @@ void skin_changes_nothing() {
     std::uniform_real_distribution<double> u(-1.0, 1.0);
     for (Vec<Dim>& v : sim.particles().v)
       for (int d = 0; d < Dim; ++d) v[d] = u(rng);
-    for (int k = 0; k < 60; ++k) searches += sim.advance(0.25 * o.spacing / 20.0).searched;
+    for (int k = 0; k < 60; ++k) {
+      const SphStepReport r = sim.advance(0.25 * o.spacing / 20.0);
+      searches += r.searched;
+      changes += r.resampling.split + r.resampling.merged;
+    }
     return sim.state();
   };
   // A thick skin (lists kept from one redistancing step to the next) and a thin one (lists found
@@ -447,6 +453,18 @@ void skin_changes_nothing() {
     else
       EXPECT_GT(searched, 30) << "the thin skin ran out on " << searched << " of 60 steps only";
   }
+  // Lists found again after every split or merge instead of patched: the same bits, and more
+  // searches wherever the column split or merged (in 2D it does: the patch has work to do).
+  changes = 0;
+  long patched = 0, searched = 0;
+  const SphState<Dim> c = run(0.2, patched, true), d = run(0.2, searched, false);
+  ASSERT_EQ(c.particles.size(), d.particles.size());
+  for (int i = 0; i < c.particles.size(); ++i) {
+    ASSERT_TRUE(c.particles.x[i] == d.particles.x[i]) << "particle " << i;
+    ASSERT_TRUE(c.particles.v[i] == d.particles.v[i]) << "particle " << i;
+  }
+  if (Dim == 2) EXPECT_GT(changes, 0) << "the 2D column neither split nor merged: the patch went untested";
+  if (changes > 0) EXPECT_LT(patched, searched) << "patching the lists after splits and merges saved no search";
 }
 TEST(AdaptiveSph, NeighbourSkinChangesNothingToTheBit2D) {
   skin_changes_nothing<2>();
