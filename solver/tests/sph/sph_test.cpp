@@ -464,7 +464,8 @@ void skin_changes_nothing() {
     ASSERT_TRUE(c.particles.v[i] == d.particles.v[i]) << "particle " << i;
   }
   if (Dim == 2) EXPECT_GT(changes, 0) << "the 2D column neither split nor merged: the patch went untested";
-  if (changes > 0) EXPECT_LT(patched, searched) << "patching the lists after splits and merges saved no search";
+  if (changes > 0)
+    EXPECT_LT(patched, searched) << "patching the lists after splits and merges saved no search";
 }
 TEST(AdaptiveSph, NeighbourSkinChangesNothingToTheBit2D) {
   skin_changes_nothing<2>();
