@@ -42,13 +42,18 @@ struct PairTerms {
   double volume = 0.0, gradient_c = 0.0, laplacian_c = 0.0;
 };
 
+/// The constant of the pressure kernel's gradient at support r.
+template <int Dim>
+double gradient_constant(const FluidConstants& fluid, double r) {
+  return fluid.kernels == KernelSet::wendland ? Kernels<Dim>::wendland_constant(r)
+                                              : Kernels<Dim>::spiky_gradient_constant(r);
+}
+
 template <int Dim>
 PairTerms pair_terms(const SphParticles<Dim>& p, int i, const FluidConstants& fluid) {
-  using K = Kernels<Dim>;
   const double r = p.radius[i];
-  return {p.mass[i] / p.density[i],
-          fluid.kernels == KernelSet::wendland ? K::wendland_constant(r) : K::spiky_gradient_constant(r),
-          K::viscosity_laplacian_constant(r)};
+  return {p.mass[i] / p.density[i], gradient_constant<Dim>(fluid, r),
+          Kernels<Dim>::viscosity_laplacian_constant(r)};
 }
 
 template <int Dim>
@@ -102,8 +107,7 @@ double density_kernel(const FluidConstants& fluid, double q, double r) {
 
 template <int Dim>
 Vec<Dim> pressure_kernel_gradient(const FluidConstants& fluid, const Vec<Dim>& x, double r) {
-  return fluid.kernels == KernelSet::wendland ? Kernels<Dim>::wendland_gradient(x, r)
-                                              : Kernels<Dim>::spiky_gradient(x, r);
+  return pressure_gradient<Dim>(fluid, x, x.norm(), r, gradient_constant<Dim>(fluid, r));
 }
 
 template <int Dim>
