@@ -43,8 +43,8 @@ std::string echo(const std::string& case_name, const StudyFlags& flags);
 /// Registers the options of `liquid-verify poisson` on `app`.
 void add_user_poisson_flags(CLI::App& app, UserPoissonArgs& args);
 
-/// The default budget of cells for one row: half the machine's memory at 4 KiB a cell (tree,
-/// matrix with RBF-FD rows, ILUT factors and solver vectors measured at about 2-3 KiB).
+/// The default budget of cells for one row: half the machine's memory at kCellBytes a cell (a study
+/// counts each unknown as kUnknownCells<Dim> cells more).
 long default_max_cells();
 
 /// "A:B" with integers 0 <= A <= B <= 64; throws liquid::Error naming `flag`.

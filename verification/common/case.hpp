@@ -68,9 +68,18 @@ struct CaseOptions {
   std::optional<double> tolerance;           ///< --tolerance T: the solver's relative residual
   std::optional<Perturbation> perturb;       ///< --perturb first-order
   std::optional<std::string> trees_dir;      ///< --trees DIR: write the trees checked
-  long max_cells = 0;                        ///< refuse rows above this many cells (0: no limit)
+  long max_cells = 0;                        ///< budget: refuse rows above this many cells (0: no limit)
   bool full = false;                         ///< the full suite's extent rather than the quick one
 };
+
+/// The budget's unit. A study's cost is counted in cells of kCellBytes: peak memory measured on
+/// the Poisson studies was about 350 B a tree cell, plus 570 B (2D) or 2.4 kB (3D) for each cell
+/// that holds an unknown (its matrix row, RBF-FD weights and ILUT factors); the figures used carry
+/// a quarter more (kUnknownCells).
+inline constexpr double kCellBytes = 512.0;
+/// An unknown's extra memory in budget cells: 768 B in 2D, 3 kB in 3D.
+template <int Dim>
+inline constexpr double kUnknownCells = Dim == 2 ? 1.5 : 6.0;
 
 /// Every option of a Poisson convergence study (run_poisson_study reads them all).
 inline const OptionSet poisson_study_options{

@@ -232,7 +232,9 @@ CaseResult run_poisson_study(PoissonStudy<Dim> study, const CaseOptions& options
     const int fine = level + study.finest_offset;
     const double limit = options.full ? 4.0 * study.uniform_limit : study.uniform_limit;
     if (std::pow(2.0, Dim * fine) > limit) return;
-    if (study.max_cells > 0 && std::pow(2.0, Dim * fine) > double(study.max_cells)) return;
+    // A uniform row's unknowns are at most its cells.
+    if (study.max_cells > 0 && (1.0 + kUnknownCells<Dim>)*std::pow(2.0, Dim * fine) > double(study.max_cells))
+      return;
     const CellGraph<Dim> flat = tree::uniform<Dim>(study.domain, fine, tree_options);
     const PoissonRun u = solve_poisson<Dim>(flat, study);
     if (!u.solve.converged()) return;
@@ -327,22 +329,27 @@ std::vector<PoissonRun> solve_rows(const PoissonStudy<Dim>& study, CaseResult& r
   options.max_jump = study.max_jump;
   const CellGraph<Dim> first = study.make_tree(study.level_min, options);
   const std::string prefix = label.empty() ? "" : label + " ";
-  if (study.max_cells > 0) {
-    // Each row splits (or rebuilds at one level finer) about every cell of the one before.
-    const double estimate =
-        double(first.n_cells()) * std::ldexp(1.0, Dim * (study.level_max - study.level_min));
-    LIQUID_VERIFY(estimate <= double(study.max_cells),
-                  "--levels {}:{}: the first row has {} cells, so the row at base level {} would have about "
-                  "{:.3g}, over the budget of {} cells (--max-cells N raises it)",
-                  study.level_min, study.level_max, first.n_cells(), study.level_max, estimate,
-                  study.max_cells);
-  }
   std::vector<PoissonRun> runs;
   for (int level = study.level_min; level <= study.level_max; ++level) {
     // The first row solves `first` itself: no second build, no copy.
     std::optional<CellGraph<Dim>> later;
     if (level > study.level_min) later.emplace(row_tree<Dim>(study, first, level, options));
     PoissonRun run = solve_poisson<Dim>(later ? *later : first, study);
+    if (level == study.level_min && study.max_cells > 0) {
+      // Each row splits (or rebuilds at one level finer) about every cell of the one before, and
+      // so every unknown: the first row's counts scale to the last's.
+      const double growth = std::ldexp(1.0, Dim * (study.level_max - study.level_min));
+      const double cells = double(first.n_cells()) * growth, unknowns = double(run.n_unknowns) * growth;
+      const double cost = cells + kUnknownCells<Dim> * unknowns;
+      LIQUID_VERIFY(
+          cost <= double(study.max_cells),
+          "--levels {}:{}: the first row has {} cells and {} unknowns, so the row at base level {} "
+          "would have about {:.3g} cells and {:.3g} unknowns, about {:.1f} GB, over the budget of {} "
+          "cells ({:.1f} GB at {:g} B a cell, an unknown {:g} cells more; --max-cells N raises it)",
+          study.level_min, study.level_max, first.n_cells(), run.n_unknowns, study.level_max, cells, unknowns,
+          cost * kCellBytes * 1e-9, study.max_cells, double(study.max_cells) * kCellBytes * 1e-9, kCellBytes,
+          kUnknownCells<Dim>);
+    }
     result.expect(run.solve.converged(), fmt::format("{}level {}: {}", prefix, level, run.solve.describe()));
     if (!run.solve.converged()) break;
     if (on_row) on_row(level, run);
