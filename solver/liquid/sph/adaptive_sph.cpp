@@ -255,6 +255,17 @@ bool AdaptiveSph<Dim>::in_solid(const Vec<Dim>& x) const {
 }
 
 template <int Dim>
+bool AdaptiveSph<Dim>::in_collision_margin(const Vec<Dim>& x) const {
+  const double tol = 1e-12 * options_.container.size().maxCoeff(), margin = collision_margin() - tol;
+  if ((x.array() < options_.container.lo.array() + margin).any() ||
+      (x.array() > options_.container.hi.array() - margin).any())
+    return true;
+  for (const auto& obstacle : options_.obstacles)
+    if (obstacle(x) < margin) return true;
+  return false;
+}
+
+template <int Dim>
 void AdaptiveSph<Dim>::seed(const levelset::Function<Dim>& liquid, const Vec<Dim>& velocity) {
   const double s = options_.spacing;
   const Box<Dim>& box = options_.container;
@@ -384,7 +395,9 @@ void AdaptiveSph<Dim>::redistance_and_resample(SphStepReport& report) {
   std::vector<std::int32_t> origin;
   {
     auto t = timer_.scope("resample");
-    const SolidTest<Dim> solid = [this](const Vec<Dim>& x) { return in_solid(x); };
+    // A child inside the collisions' margin would be moved there before the next step: closer to its
+    // neighbours than the split allows, and away from the position its kept list was built at.
+    const SolidTest<Dim> solid = [this](const Vec<Dim>& x) { return in_collision_margin(x); };
     report.resampling = resample<Dim>(p_, exact, sizes_, options_.resampling, solid, rng_, &origin);
   }
   if (report.resampling.split + report.resampling.merged == 0) return;
@@ -472,7 +485,7 @@ void AdaptiveSph<Dim>::patch_lists(const std::vector<std::int32_t>& origin) {
 
 template <int Dim>
 void AdaptiveSph<Dim>::collide() {
-  const double margin = 0.5 * options_.spacing, e = options_.restitution;
+  const double margin = collision_margin(), e = options_.restitution;
   const Box<Dim>& box = options_.container;
   const int n = p_.size();
 #pragma omp parallel for schedule(static)

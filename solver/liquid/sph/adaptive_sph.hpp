@@ -191,6 +191,9 @@ class AdaptiveSph {
   Vec<Dim> gravity_at(double t) const;
   /// True when x is inside an obstacle or outside the container (by more than round-off).
   bool in_solid(const Vec<Dim>& x) const;
+  /// True where the collisions would move a particle (closer than their margin, half a level-0
+  /// spacing, to a wall or an obstacle; by more than round-off): no split or merge places one there.
+  bool in_collision_margin(const Vec<Dim>& x) const;
   /// The total volume the particles stand for: sum m_i / rho_0.
   double volume() const { return p_.total_mass() / options_.fluid.rest_density; }
 
@@ -217,6 +220,8 @@ class AdaptiveSph {
   /// particles' pairs are found around them.
   void patch_lists(const std::vector<std::int32_t>& origin);
   void collide();
+  /// How close to a wall or an obstacle collide() lets a particle come: half a level-0 spacing.
+  double collision_margin() const { return 0.5 * options_.spacing; }
   /// The sources' phase: imposed velocities, then new particles; returns how many were added.
   int apply_sources();
   /// Adds the turning frame's fictitious accelerations to p.a (dt: the step's, for the Coriolis term).

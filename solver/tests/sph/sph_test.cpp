@@ -474,6 +474,37 @@ TEST(AdaptiveSph, NeighbourSkinChangesNothingToTheBit3D) {
   skin_changes_nothing<3>();
 }
 
+template <int Dim>
+void resampling_keeps_out_of_the_collision_margin() {
+  // A dam break: every particle a split or merge makes must stand where the collisions leave it
+  // (outside half a spacing from the walls), or the next step moves it (closer to its neighbours
+  // than the split allowed, and away from where its kept neighbour list was built).
+  SphOptions<Dim> o;
+  Vec<Dim> hi = Vec<Dim>::Constant(Dim == 2 ? 0.6 : 0.24);
+  hi[0] = 1.0;
+  o.container = Box<Dim>{Vec<Dim>::Zero(), hi};
+  o.spacing = Dim == 2 ? 0.005 : 0.02;
+  o.resample_every = 1000;  // resampled by adapt_now() below only, then checked before any collision
+  AdaptiveSph<Dim> sim(o);
+  Vec<Dim> column = hi;
+  column[0] = 0.4, column[1] = 0.4;
+  sim.seed(levelset::box<Dim>(Box<Dim>{Vec<Dim>::Zero(), column}));
+  long split = 0, inside = 0;
+  for (int round = 0; round < (Dim == 2 ? 30 : 12); ++round) {
+    for (int k = 0; k < 5; ++k) split += sim.advance(sim.stable_dt(0.25, 1e-3)).resampling.split;
+    split += sim.adapt_now().resampling.split;
+    for (int i = 0; i < sim.particles().size(); ++i) inside += sim.in_collision_margin(sim.particles().x[i]);
+  }
+  EXPECT_GT(split, 0) << "nothing split: the test tests nothing";
+  EXPECT_EQ(inside, 0) << "particles inside the collision margin after resampling";
+}
+TEST(AdaptiveSph, ResamplingPlacesNoParticleInsideTheCollisionMargin2D) {
+  resampling_keeps_out_of_the_collision_margin<2>();
+}
+TEST(AdaptiveSph, ResamplingPlacesNoParticleInsideTheCollisionMargin3D) {
+  resampling_keeps_out_of_the_collision_margin<3>();
+}
+
 TEST(AdaptiveSph, SeedsCoarseParticlesDeepInsideAndKeepsTheVolume) {
   SphOptions<2> o;
   o.container = Box<2>{Vec<2>(0, 0), Vec<2>(1, 1)};
