@@ -102,10 +102,7 @@ void add_study_flags(CLI::App& app, StudyFlags& f) {
       ->transform(CLI::CheckedTransformer(perturb_names));
   app.add_option("--trees", f.trees_dir, "write the trees the case checks to DIR as HDF5 + XDMF (ParaView)")
       ->check(CLI::ExistingDirectory);
-  app.add_option("--max-cells", f.max_cells,
-                 "refuse rows estimated above N cells of 512 B, an unknown counting 1.5 cells more in 2D, 6 "
-                 "in 3D (default: half the memory)")
-      ->check(CLI::Range(1L, 1'000'000'000'000L));
+  app.add_option("--max-cells", f.max_cells, kMaxCellsHelp)->check(CLI::Range(1L, 1'000'000'000'000L));
   app.add_flag("--full", f.full, "use the full suite's extent");
 }
 
@@ -189,10 +186,7 @@ void add_user_poisson_flags(CLI::App& app, UserPoissonArgs& a) {
                  "P[,G]: exit 1 when the fitted order of p (and of dp/dn) falls below");
   app.add_option("--expect-error", a.expect_error, "exit 1 when the finest row's L-inf error of p exceeds E")
       ->check(CLI::PositiveNumber);
-  app.add_option("--max-cells", a.max_cells,
-                 "refuse rows estimated above N cells of 512 B, an unknown counting 1.5 cells more in 2D, 6 "
-                 "in 3D (default: half the memory)")
-      ->check(CLI::Range(1L, 1'000'000'000'000L));
+  app.add_option("--max-cells", a.max_cells, kMaxCellsHelp)->check(CLI::Range(1L, 1'000'000'000'000L));
 }
 
 }  // namespace liquid::verification

@@ -80,6 +80,15 @@ inline constexpr double kCellBytes = 512.0;
 /// An unknown's extra memory in budget cells: 768 B in 2D, 3 kB in 3D.
 template <int Dim>
 inline constexpr double kUnknownCells = Dim == 2 ? 1.5 : 6.0;
+/// What a row of `cells` cells and `unknowns` unknowns costs, in budget cells.
+template <int Dim>
+constexpr double budget_cost(double cells, double unknowns) {
+  return cells + kUnknownCells<Dim> * unknowns;
+}
+/// The help text of --max-cells (liquid-verify run and liquid-verify poisson).
+inline constexpr const char* kMaxCellsHelp =
+    "refuse rows estimated above N cells of 512 B, an unknown counting 1.5 cells more in 2D, 6 in 3D "
+    "(default: half the memory)";
 
 /// Every option of a Poisson convergence study (run_poisson_study reads them all).
 inline const OptionSet poisson_study_options{

@@ -233,7 +233,8 @@ CaseResult run_poisson_study(PoissonStudy<Dim> study, const CaseOptions& options
     const double limit = options.full ? 4.0 * study.uniform_limit : study.uniform_limit;
     if (std::pow(2.0, Dim * fine) > limit) return;
     // A uniform row's unknowns are at most its cells.
-    if (study.max_cells > 0 && (1.0 + kUnknownCells<Dim>)*std::pow(2.0, Dim * fine) > double(study.max_cells))
+    if (study.max_cells > 0 &&
+        budget_cost<Dim>(std::ldexp(1.0, Dim * fine), std::ldexp(1.0, Dim * fine)) > double(study.max_cells))
       return;
     const CellGraph<Dim> flat = tree::uniform<Dim>(study.domain, fine, tree_options);
     const PoissonRun u = solve_poisson<Dim>(flat, study);
@@ -340,7 +341,7 @@ std::vector<PoissonRun> solve_rows(const PoissonStudy<Dim>& study, CaseResult& r
       // so every unknown: the first row's counts scale to the last's.
       const double growth = std::ldexp(1.0, Dim * (study.level_max - study.level_min));
       const double cells = double(first.n_cells()) * growth, unknowns = double(run.n_unknowns) * growth;
-      const double cost = cells + kUnknownCells<Dim> * unknowns;
+      const double cost = budget_cost<Dim>(cells, unknowns);
       LIQUID_VERIFY(
           cost <= double(study.max_cells),
           "--levels {}:{}: the first row has {} cells and {} unknowns, so the row at base level {} "

@@ -45,7 +45,8 @@ struct PoissonStudy {
   double order_floor = 1.9, order_grad_floor = 1.8;
   std::optional<double> error_ceiling;  ///< the finest row's L-inf error of p must not exceed it
   bool asserted = true;                 ///< false: a user's study without expectations
-  long max_cells = 0;                   ///< refuse rows estimated above this many cells (kCellBytes each, unknowns counted as kUnknownCells more; 0: no limit)
+  long max_cells = 0;  ///< refuse rows estimated above this many cells (kCellBytes each, unknowns counted as
+                       ///< kUnknownCells more; 0: no limit)
   long uniform_limit = 300000;  ///< skip the uniform comparison rows above this many cells (quick tier)
 
   /// Takes p, grad p and f = Lap p from a manufactured solution.
