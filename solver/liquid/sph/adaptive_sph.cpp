@@ -265,6 +265,59 @@ bool AdaptiveSph<Dim>::in_collision_margin(const Vec<Dim>& x) const {
   return false;
 }
 
+namespace {
+
+/// An obstacle's gradient at x by central differences of step 1e-6 spacings.
+template <int Dim>
+Vec<Dim> obstacle_gradient(const levelset::Function<Dim>& obstacle, const Vec<Dim>& x, double spacing) {
+  Vec<Dim> g;
+  const double step = 1e-6 * spacing;
+  for (int d = 0; d < Dim; ++d) {
+    Vec<Dim> a = x, b = x;
+    a[d] -= step, b[d] += step;
+    g[d] = (obstacle(b) - obstacle(a)) / (2.0 * step);
+  }
+  return g;
+}
+
+}  // namespace
+
+template <int Dim>
+double AdaptiveSph<Dim>::solid_distance(const Vec<Dim>& x, Vec<Dim>* closest) const {
+  const Box<Dim>& box = options_.container;
+  double best = SphParticles<Dim>::infinity;
+  for (int d = 0; d < Dim; ++d)
+    for (const double face : {box.lo[d], box.hi[d]}) {
+      const double dist = std::abs(x[d] - face);
+      if (dist < best) {
+        best = dist;
+        if (closest) *closest = x, (*closest)[d] = face;
+      }
+    }
+  for (const auto& obstacle : options_.obstacles) {
+    const double phi = obstacle(x);
+    if (!(std::abs(phi) < best)) continue;
+    const Vec<Dim> g = obstacle_gradient(obstacle, x, options_.spacing);
+    const double gn = g.norm();
+    if (!(gn > 0.0)) continue;
+    best = std::abs(phi);
+    if (closest) *closest = x - phi * g / gn;
+  }
+  return best;
+}
+
+template <int Dim>
+void AdaptiveSph<Dim>::footpoints_onto_walls() {
+  const int n = p_.size();
+  const double reach = options_.spacing;
+#pragma omp parallel for schedule(static)
+  for (int i = 0; i < n; ++i) {
+    if (!(solid_distance(p_.foot[i]) < reach)) continue;
+    Vec<Dim> y;
+    if (std::isfinite(solid_distance(p_.x[i], &y))) p_.foot[i] = y;
+  }
+}
+
 template <int Dim>
 void AdaptiveSph<Dim>::seed(const levelset::Function<Dim>& liquid, const Vec<Dim>& velocity) {
   const double s = options_.spacing;
@@ -382,6 +435,7 @@ void AdaptiveSph<Dim>::redistance_and_resample(SphStepReport& report) {
   if (!options_.adaptive) return;
   {
     auto t = timer_.scope("elfs");
+    if (options_.wall_footpoints) footpoints_onto_walls();
     report.features = feature_size<Dim>(p_, exact, options_.gamma_degrees);
     if (options_.view.active()) {
       const int n = p_.size();
@@ -495,13 +549,7 @@ void AdaptiveSph<Dim>::collide() {
     for (const auto& obstacle : options_.obstacles) {
       const double phi = obstacle(x);
       if (phi >= margin) continue;
-      Vec<Dim> g;
-      const double step = 1e-6 * options_.spacing;
-      for (int d = 0; d < Dim; ++d) {
-        Vec<Dim> a = x, b = x;
-        a[d] -= step, b[d] += step;
-        g[d] = (obstacle(b) - obstacle(a)) / (2.0 * step);
-      }
+      const Vec<Dim> g = obstacle_gradient(obstacle, x, options_.spacing);
       const double gn = g.norm();
       if (!(gn > 0.0)) continue;
       const Vec<Dim> nrm = g / gn;

@@ -291,6 +291,7 @@ TEST(SphScene, EveryKeyRefusesABadValueByName) {
       {"spacing = 0.02\nrestitution = 1.5", "key 'sph.restitution': 1.5 is outside"},
       {"spacing = 0.02\nneighbour_skin = -0.1", "key 'sph.neighbour_skin': -0.1 is outside"},
       {"spacing = 0.02\nneighbour_skin = nan", "key 'sph.neighbour_skin': expected a finite number"},
+      {"spacing = 0.02\nwall_footpoints = 1", "key 'sph.wall_footpoints': expected true or false"},
       {"spacing = 0.02\nseed = -1", "key 'sph.seed': -1 is outside"},
       {"spacing = 0.02\nturn_angle = 1e9", "more than ten turns"},
       {"spacing = 0.02\nturn_angle = 90.0\nturn_duration = 0.0", "key 'sph.turn_duration': must be positive"},

@@ -410,6 +410,9 @@ void skin_changes_nothing() {
   const auto run = [&changes](double skin, long& searches, bool patch = true) {
     SphOptions<Dim> o;
     o.patch_lists = patch;
+    // The paper's footpoints: the layers on the walls read as surface and split and merge early in
+    // the run, which gives the patch its work (with wall_footpoints the stirred column changes later).
+    o.wall_footpoints = false;
     Vec<Dim> hi = Vec<Dim>::Constant(0.3);
     hi[0] = 0.6;
     o.container = Box<Dim>{Vec<Dim>::Zero(), hi};
@@ -485,6 +488,9 @@ void resampling_keeps_out_of_the_collision_margin() {
   o.container = Box<Dim>{Vec<Dim>::Zero(), hi};
   o.spacing = Dim == 2 ? 0.005 : 0.02;
   o.resample_every = 1000;  // resampled by adapt_now() below only, then checked before any collision
+  // The paper's footpoints: the layers on the walls read as surface, so particles split right next
+  // to the walls within these few rounds (with wall_footpoints, only later, where the front thins).
+  o.wall_footpoints = false;
   AdaptiveSph<Dim> sim(o);
   Vec<Dim> column = hi;
   column[0] = 0.4, column[1] = 0.4;
@@ -520,6 +526,52 @@ TEST(AdaptiveSph, SeedsCoarseParticlesDeepInsideAndKeepsTheVolume) {
       << "the adaptive tank holds more than half the lattice's particles";
   // Split and merge keep the mass of the 100 x 50 lattice.
   EXPECT_NEAR(sim.particles().total_mass(), 5000 * sim.sizes().mass, 1e-12 * 5000 * sim.sizes().mass);
+}
+
+/// A still tank [0,1] x [0,1] filled to 0.5 (s = 0.01) whose floor layer is bumpy, as the collisions
+/// leave it: each particle within a spacing of the floor raised by up to a fifth of a spacing (a
+/// fixed random draw), then one adapt pass.
+AdaptiveSph<2> bumpy_tank(bool wall_footpoints) {
+  SphOptions<2> o;
+  o.container = Box<2>{Vec<2>(0, 0), Vec<2>(1, 1)};
+  o.spacing = 0.01;
+  o.wall_footpoints = wall_footpoints;
+  AdaptiveSph<2> sim(o);
+  sim.seed(levelset::box<2>(Box<2>{Vec<2>(0, 0), Vec<2>(1, 0.5)}));
+  SphState<2> state = sim.state();
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> raise(0.0, 0.2 * o.spacing);
+  for (auto& x : state.particles.x)
+    if (x[1] < o.spacing) x[1] += raise(rng);
+  sim.restore(state);
+  sim.adapt_now();
+  return sim;
+}
+
+TEST(AdaptiveSph, FootpointsByAWallLieOnTheWall) {
+  // Where the liquid lies on a wall its boundary is the wall itself, not the particles' bumpy
+  // distance surface there: the floor layer's footpoints are the points of the floor under them.
+  for (const bool on : {true, false}) {
+    const AdaptiveSph<2> sim = bumpy_tank(on);
+    const auto& p = sim.particles();
+    int by_floor = 0, on_floor = 0;
+    double smallest_elfs = SphParticles<2>::infinity;
+    for (int i = 0; i < p.size(); ++i) {
+      if (p.x[i][1] > 0.03 || p.x[i][0] < 0.1 || p.x[i][0] > 0.9) continue;  // 3 spacings deep
+      ++by_floor;
+      on_floor += p.foot[i][1] == 0.0 && p.foot[i][0] == p.x[i][0];
+      if (p.x[i][0] > 0.25 && p.x[i][0] < 0.75) smallest_elfs = std::min(smallest_elfs, p.elfs[i]);
+    }
+    ASSERT_GT(by_floor, 20);
+    if (on) {
+      EXPECT_EQ(on_floor, by_floor) << "footpoints of the floor layer off the floor";
+      // The slab's medial axis is at mid-depth (0.25 away), the corners' bisectors at least 0.18.
+      EXPECT_GT(smallest_elfs, 0.125) << "a feature by the floor";
+    } else {
+      EXPECT_EQ(on_floor, 0)
+          << "the paper's footpoints (on the distance surface) on the floor: the test tests nothing";
+    }
+  }
 }
 
 TEST(AdaptiveSph, RefusesImpossibleOptions) {
