@@ -86,8 +86,20 @@ std::optional<Crossing<Dim>> crossing(const Function<Dim>& phi, const Vec<Dim>& 
   return Crossing<Dim>{t, a + t * (b - a)};
 }
 
+template <int Dim>
+Vec<Dim> gradient(const Function<Dim>& phi, const Vec<Dim>& x, double step) {
+  Vec<Dim> g;
+  for (int d = 0; d < Dim; ++d) {
+    Vec<Dim> a = x, b = x;
+    a[d] -= step, b[d] += step;
+    g[d] = (phi(b) - phi(a)) / (2.0 * step);
+  }
+  return g;
+}
+
 #define LIQUID_LEVELSET_INSTANTIATE(D)                                                                      \
   template Function<D> sphere<D>(const Vec<D>&, double);                                                    \
+  template Vec<D> gradient<D>(const Function<D>&, const Vec<D>&, double);                                   \
   template Function<D> box<D>(const Box<D>&);                                                               \
   template Function<D> unite<D>(Function<D>, Function<D>);                                                  \
   template Function<D> intersect<D>(Function<D>, Function<D>);                                              \

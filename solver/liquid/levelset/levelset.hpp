@@ -29,6 +29,10 @@ Function<Dim> intersect(Function<Dim> a, Function<Dim> b);
 template <int Dim>
 Function<Dim> subtract(Function<Dim> a, Function<Dim> b);
 
+/// The gradient of phi at x by central differences of the given step along each axis.
+template <int Dim>
+Vec<Dim> gradient(const Function<Dim>& phi, const Vec<Dim>& x, double step);
+
 /// Where the interface cuts the segment a -> b.
 template <int Dim>
 struct Crossing {

@@ -265,23 +265,6 @@ bool AdaptiveSph<Dim>::in_collision_margin(const Vec<Dim>& x) const {
   return false;
 }
 
-namespace {
-
-/// An obstacle's gradient at x by central differences of step 1e-6 spacings.
-template <int Dim>
-Vec<Dim> obstacle_gradient(const levelset::Function<Dim>& obstacle, const Vec<Dim>& x, double spacing) {
-  Vec<Dim> g;
-  const double step = 1e-6 * spacing;
-  for (int d = 0; d < Dim; ++d) {
-    Vec<Dim> a = x, b = x;
-    a[d] -= step, b[d] += step;
-    g[d] = (obstacle(b) - obstacle(a)) / (2.0 * step);
-  }
-  return g;
-}
-
-}  // namespace
-
 template <int Dim>
 double AdaptiveSph<Dim>::solid_distance(const Vec<Dim>& x, Vec<Dim>* closest) const {
   const Box<Dim>& box = options_.container;
@@ -297,7 +280,7 @@ double AdaptiveSph<Dim>::solid_distance(const Vec<Dim>& x, Vec<Dim>* closest) co
   for (const auto& obstacle : options_.obstacles) {
     const double phi = obstacle(x);
     if (!(std::abs(phi) < best)) continue;
-    const Vec<Dim> g = obstacle_gradient(obstacle, x, options_.spacing);
+    const Vec<Dim> g = levelset::gradient(obstacle, x, 1e-6 * options_.spacing);
     const double gn = g.norm();
     if (!(gn > 0.0)) continue;
     best = std::abs(phi);
@@ -549,7 +532,7 @@ void AdaptiveSph<Dim>::collide() {
     for (const auto& obstacle : options_.obstacles) {
       const double phi = obstacle(x);
       if (phi >= margin) continue;
-      const Vec<Dim> g = obstacle_gradient(obstacle, x, options_.spacing);
+      const Vec<Dim> g = levelset::gradient(obstacle, x, 1e-6 * options_.spacing);
       const double gn = g.norm();
       if (!(gn > 0.0)) continue;
       const Vec<Dim> nrm = g / gn;

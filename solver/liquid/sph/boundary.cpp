@@ -89,13 +89,7 @@ void Boundary<Dim>::for_each_wall(const Vec<Dim>& x, double r, F f) const {
   for (const auto& obstacle : obstacles_) {
     const double phi = obstacle(x);
     if (phi >= r) continue;
-    Vec<Dim> g;
-    const double step = 1e-6 * r;
-    for (int d = 0; d < Dim; ++d) {
-      Vec<Dim> a = x, b = x;
-      a[d] -= step, b[d] += step;
-      g[d] = (obstacle(b) - obstacle(a)) / (2.0 * step);
-    }
+    const Vec<Dim> g = levelset::gradient(obstacle, x, 1e-6 * r);
     const double gn = g.norm();
     if (gn > 0.0) f(std::max(0.0, phi), Vec<Dim>(g / gn));
   }
