@@ -266,38 +266,15 @@ bool AdaptiveSph<Dim>::in_collision_margin(const Vec<Dim>& x) const {
 }
 
 template <int Dim>
-double AdaptiveSph<Dim>::solid_distance(const Vec<Dim>& x, Vec<Dim>* closest) const {
-  const Box<Dim>& box = options_.container;
-  double best = SphParticles<Dim>::infinity;
-  for (int d = 0; d < Dim; ++d)
-    for (const double face : {box.lo[d], box.hi[d]}) {
-      const double dist = std::abs(x[d] - face);
-      if (dist < best) {
-        best = dist;
-        if (closest) *closest = x, (*closest)[d] = face;
-      }
-    }
-  for (const auto& obstacle : options_.obstacles) {
-    const double phi = obstacle(x);
-    if (!(std::abs(phi) < best)) continue;
-    const Vec<Dim> g = levelset::gradient(obstacle, x, 1e-6 * options_.spacing);
-    const double gn = g.norm();
-    if (!(gn > 0.0)) continue;
-    best = std::abs(phi);
-    if (closest) *closest = x - phi * g / gn;
-  }
-  return best;
-}
-
-template <int Dim>
 void AdaptiveSph<Dim>::footpoints_onto_walls() {
   const int n = p_.size();
   const double reach = options_.spacing;
 #pragma omp parallel for schedule(static)
   for (int i = 0; i < n; ++i) {
-    if (!(solid_distance(p_.foot[i]) < reach)) continue;
+    if (!std::isfinite(walls_.nearest(p_.foot[i], reach))) continue;
+    // The solid near the footpoint is within |x - y| + reach of the particle: so is its nearest one.
     Vec<Dim> y;
-    if (std::isfinite(solid_distance(p_.x[i], &y))) p_.foot[i] = y;
+    if (std::isfinite(walls_.nearest(p_.x[i], (p_.x[i] - p_.foot[i]).norm() + reach, &y))) p_.foot[i] = y;
   }
 }
 

@@ -230,9 +230,6 @@ class AdaptiveSph {
   void collide();
   /// How close to a wall or an obstacle collide() lets a particle come: half a level-0 spacing.
   double collision_margin() const { return 0.5 * options_.spacing; }
-  /// The distance from x to the nearest solid surface (a container face or an obstacle's zero level)
-  /// and, through `closest`, the point of it nearest x; infinite when there is none.
-  double solid_distance(const Vec<Dim>& x, Vec<Dim>* closest = nullptr) const;
   /// SphOptions::wall_footpoints: every footpoint within a level-0 spacing of a solid becomes the
   /// point of the solid nearest its particle.
   void footpoints_onto_walls();

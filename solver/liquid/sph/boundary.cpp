@@ -2,6 +2,7 @@
 
 #include <array>
 #include <cmath>
+#include <limits>
 #include <numbers>
 
 #include "liquid/sph/forces.hpp"
@@ -93,6 +94,17 @@ void Boundary<Dim>::for_each_wall(const Vec<Dim>& x, double r, F f) const {
     const double gn = g.norm();
     if (gn > 0.0) f(std::max(0.0, phi), Vec<Dim>(g / gn));
   }
+}
+
+template <int Dim>
+double Boundary<Dim>::nearest(const Vec<Dim>& x, double reach, Vec<Dim>* closest) const {
+  double best = std::numeric_limits<double>::infinity();
+  for_each_wall(x, reach, [&](double distance, const Vec<Dim>& normal) {
+    if (!(distance < best)) return;
+    best = distance;
+    if (closest) *closest = x - distance * normal;  // the normal points into the liquid
+  });
+  return best;
 }
 
 template <int Dim>

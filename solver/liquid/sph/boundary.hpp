@@ -40,6 +40,10 @@ class Boundary {
   /// the rate rho_0 grad share . v.
   Vec<Dim> share_gradient(const Vec<Dim>& x, double r, KernelSet kernels) const;
 
+  /// The nearest wall or obstacle closer to x than `reach`: its distance (0 from inside a solid) and,
+  /// through `closest`, its point nearest x; infinite (and `closest` untouched) when none is.
+  double nearest(const Vec<Dim>& x, double reach, Vec<Dim>* closest = nullptr) const;
+
   /// The density kernel's mass beyond a plane at distance delta * r, for r = 1; 0 for delta >= 1.
   static double beyond(KernelSet kernels, double delta);
   /// -d/d delta of beyond(): the density kernel integrated over the plane at delta.

@@ -126,6 +126,34 @@ TEST(SphBoundary, WallSharesAreTheKernelBeyondAPlane3D) {
   wall_shares_are_the_kernel_beyond_a_plane<3>();
 }
 
+template <int Dim>
+void nearest_wall_is_the_closest_solid_point() {
+  // A unit box with a sphere of radius 0.1 at its centre: the nearest solid point of a point beside
+  // the sphere is on the sphere, of one beside the floor on the floor; nothing beyond the reach.
+  const Vec<Dim> centre = Vec<Dim>::Constant(0.5);
+  const Boundary<Dim> walls(Box<Dim>{Vec<Dim>::Zero(), Vec<Dim>::Ones()},
+                            {levelset::sphere<Dim>(centre, 0.1)});
+  Vec<Dim> x = centre, y;
+  x[0] += 0.13;
+  EXPECT_NEAR(walls.nearest(x, 0.05, &y), 0.03, 1e-9);
+  Vec<Dim> on = centre;
+  on[0] += 0.1;
+  EXPECT_LT((y - on).norm(), 1e-6);
+  x = Vec<Dim>::Constant(0.3);
+  x[1] = 0.02;
+  EXPECT_NEAR(walls.nearest(x, 0.05, &y), 0.02, 1e-15);
+  Vec<Dim> floor = x;
+  floor[1] = 0.0;
+  EXPECT_EQ(y, floor);
+  EXPECT_FALSE(std::isfinite(walls.nearest(Vec<Dim>::Constant(0.25), 0.05)));
+}
+TEST(SphBoundary, NearestWallIsTheClosestSolidPoint2D) {
+  nearest_wall_is_the_closest_solid_point<2>();
+}
+TEST(SphBoundary, NearestWallIsTheClosestSolidPoint3D) {
+  nearest_wall_is_the_closest_solid_point<3>();
+}
+
 /// Random particles of levels 0..2 in the unit box, with random velocities.
 template <int Dim>
 SphParticles<Dim> random_particles(const Sizes& sizes, int n, std::uint64_t seed) {
