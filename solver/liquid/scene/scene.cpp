@@ -294,16 +294,36 @@ std::string format_box(const Box<Dim>& b) {
                      fmt::join(b.hi.data(), b.hi.data() + Dim, ", "));
 }
 
-const std::vector<std::string> sph_keys = {"spacing",        "levels",      "resample_every",
-                                           "alpha",          "beta",        "kernel",
-                                           "pressure",       "density",     "density_diffusion",
-                                           "rest_density",   "sound_speed", "viscosity",
-                                           "search",         "surface",     "settle",
-                                           "gate_lo",        "gate_hi",     "restitution",
-                                           "seed",           "turn_angle",  "turn_duration",
-                                           "turn_pivot",     "turn_axis",   "view_eye",
-                                           "view_target",    "view_angle",  "neighbour_skin",
-                                           "wall_footpoints"};
+const std::vector<std::string> sph_keys = {"spacing",
+                                           "levels",
+                                           "resample_every",
+                                           "alpha",
+                                           "beta",
+                                           "kernel",
+                                           "pressure",
+                                           "density",
+                                           "density_diffusion",
+                                           "rest_density",
+                                           "sound_speed",
+                                           "viscosity",
+                                           "search",
+                                           "surface",
+                                           "settle",
+                                           "gate_lo",
+                                           "gate_hi",
+                                           "restitution",
+                                           "seed",
+                                           "turn_angle",
+                                           "turn_duration",
+                                           "turn_pivot",
+                                           "turn_axis",
+                                           "view_eye",
+                                           "view_target",
+                                           "view_angle",
+                                           "neighbour_skin",
+                                           "wall_footpoints",
+                                           "mirror_walls",
+                                           "kicked_density_rate"};
 
 /// The value of `choices` whose name (to_string) is `name`.
 template <class E>
@@ -354,6 +374,8 @@ void read_sph(const TableReader& r, Scene<Dim>& s) {
   LIQUID_VERIFY(o.neighbour_skin >= 0.0 && o.neighbour_skin <= 10.0, "{}: {} is outside [0, 10] spacings",
                 r.where("neighbour_skin"), o.neighbour_skin);
   o.wall_footpoints = r.boolean("wall_footpoints", o.wall_footpoints);
+  o.fluid.mirror_walls = r.boolean("mirror_walls", o.fluid.mirror_walls);
+  o.fluid.kicked_density_rate = r.boolean("kicked_density_rate", o.fluid.kicked_density_rate);
   o.fluid.rest_density = r.positive("rest_density", o.fluid.rest_density);
   if (r.has("sound_speed")) sc.sound_speed = r.positive("sound_speed");
   o.fluid.viscosity = r.number("viscosity", o.fluid.viscosity);

@@ -557,10 +557,12 @@ SphStepReport AdaptiveSph<Dim>::advance(double dt) {
       compute_density<Dim>(p_, nbrs_, options_.fluid, &walls_);
     } else {
       compute_pressure<Dim>(p_, options_.fluid);
-      compute_density_rate<Dim>(p_, nbrs_, options_.fluid, gravity, &walls_);
     }
     compute_accelerations<Dim>(p_, nbrs_, options_.fluid, gravity, &walls_);
     if (options_.rotation.active()) add_frame_accelerations(dt);
+    if (options_.fluid.density_update == DensityUpdate::continuity)
+      compute_density_rate<Dim>(p_, nbrs_, options_.fluid, gravity, &walls_,
+                                options_.fluid.kicked_density_rate ? dt : 0.0);
     for (int i = 0; i < p_.size(); ++i) {
       if (!std::isfinite(p_.density[i]) || !std::isfinite(p_.drho[i]) || !p_.a[i].allFinite())
         throw_not_finite(i);

@@ -138,6 +138,16 @@ Vec<Dim> Boundary<Dim>::share_gradient(const Vec<Dim>& x, double r, KernelSet ke
   return g;
 }
 
+template <int Dim>
+Vec<Dim> Boundary<Dim>::hydrostatic_gradient(const Vec<Dim>& x, double r, KernelSet kernels,
+                                             const Vec<Dim>& g) const {
+  Vec<Dim> h = Vec<Dim>::Zero();
+  for_each_wall(x, r, [&](double d, const Vec<Dim>& n) {
+    h += (g.dot(n) * d * on_plane(kernels, d / r) / r) * n + beyond(kernels, d / r) * g;
+  });
+  return h;
+}
+
 template class Boundary<2>;
 template class Boundary<3>;
 

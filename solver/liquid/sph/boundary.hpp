@@ -7,13 +7,19 @@
 // counted they sit at rest. Each wall is taken as the plane
 // tangent to it at the particle's distance d, so its share is a function of d / r alone:
 //   density    rho_0 Phi(d / r),    Phi(delta) = the density kernel's mass beyond a plane at delta r
-//   pressure   a = (P_i rho_0 / rho_i^2) |Phi'(d / r)| / r  along the wall's normal, into the liquid:
-//              -(P_i / rho_i^2) grad(the wall's share of rho_i), the force that conserves energy with
-//              that share. (A mirrored wall at the particle's pressure, the pair force of Eq. 1 summed
-//              over the wall, pushes twice as hard and does not: measured, it set the bottom layer of
-//              a still tank moving at 0.4-1 m/s within 0.2 s.) Phi and its
-// derivative are tabulated once per dimension (1024 points, linear interpolation). Near a corner
-// several walls are within reach: the mass beyond any of them is taken as 1 - prod_k (1 - Phi_k),
+//   pressure   a = -(P_i rho_0 / rho_i^2) grad Phi: a wall at zero pressure (FluidConstants::
+//              mirror_walls = false). By default the wall is the liquid mirrored in it, as the pair
+//              force of Eq. 1 summed over the wall sees it: pressure P_i beyond it, growing with
+//              depth as at rest (hydrostatic_gradient), and the normal velocity reversed, so the
+//              push and the continuity's wall term are both twice the zero-pressure wall's (doubling
+//              the push alone breaks the energy balance between them: measured, a still tank's
+//              bottom layer then moved at 0.4-1 m/s within 0.2 s). The zero-pressure wall pushes a particle
+//              of uniform pressure back with half the force the liquid on its other side pushes it
+//              with: a still tank's floor row rested on the collisions' margin. Without the growth
+//              with depth, a particle by a side wall misses the vertical pressure gradient of the
+//              kernel's part beyond it, and the liquid slid along the walls (s = 1/50: 0.1 sqrt(gH)).
+// Phi and its derivative are tabulated once per dimension (1024 points, linear interpolation). Near
+// a corner several walls are within reach: the mass beyond any of them is taken as 1 - prod_k (1 - Phi_k),
 // exact for one wall and for a kernel that factorises along the axes (a Gaussian); summing the
 // Phi_k instead counts the corner's quadrant twice, which read 9% above rho_0 at a 2D tank's corner
 // and kicked its particles at 1 m/s.
@@ -39,6 +45,13 @@ class Boundary {
   /// with a = -(P rho_0 / rho^2) grad share and, with a continuity density, change its density at
   /// the rate rho_0 grad share . v.
   Vec<Dim> share_gradient(const Vec<Dim>& x, double r, KernelSet kernels) const;
+
+  /// What the walls add to the pressure force where the mirrored liquid's pressure grows with depth
+  /// as at rest, P_w(y) = P_i + rho_0 g . (y - x): the integral over the walls of
+  /// (P_w(y) - P_i) grad W(x - y) dy, per unit rho_0, summed over the walls within reach. For a wall
+  /// at distance d with normal n into the liquid, exactly: (g . n) d Pi(d) n + Phi(d) g, with Phi the
+  /// kernel mass beyond the wall and Pi its plane integral there.
+  Vec<Dim> hydrostatic_gradient(const Vec<Dim>& x, double r, KernelSet kernels, const Vec<Dim>& g) const;
 
   /// The nearest wall or obstacle closer to x than `reach`: its distance (0 from inside a solid) and,
   /// through `closest`, its point nearest x; infinite (and `closest` untouched) when none is.

@@ -1,5 +1,6 @@
 #include "liquid/sph/forces.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <vector>
 
@@ -27,6 +28,12 @@ const char* to_string(PressureForm form) {
 }
 
 namespace {
+/// The walls' terms as the liquid mirrored in them (its own pressure, its normal velocity reversed) see
+/// them: twice those of a wall at zero pressure and at rest (FluidConstants::mirror_walls).
+double wall_factor(const FluidConstants& fluid) {
+  return fluid.mirror_walls ? 2.0 : 1.0;
+}
+
 /// |x_i - x_j|^2 (given) < max(r_i, r_j)^2: beyond it every kernel of the pair is zero, and the lists may
 /// hold such pairs (a Verlet skin); skipping them leaves every sum as it was, to the bit.
 template <int Dim>
@@ -142,8 +149,9 @@ void compute_pressure(SphParticles<Dim>& p, const FluidConstants& fluid) {
 
 template <int Dim>
 void compute_density_rate(SphParticles<Dim>& p, const NeighbourLists& nbrs, const FluidConstants& fluid,
-                          const Vec<Dim>& gravity, const Boundary<Dim>* walls) {
+                          const Vec<Dim>& gravity, const Boundary<Dim>* walls, double kick) {
   const int n = p.size();
+  auto velocity = [&](int k) -> Vec<Dim> { return kick == 0.0 ? p.v[k] : Vec<Dim>(p.v[k] + kick * p.a[k]); };
   const double c = std::sqrt(fluid.stiffness / fluid.rest_density);
   const double hydrostatic = fluid.rest_density * fluid.rest_density / fluid.stiffness;
   const std::vector<PairTerms> terms = all_pair_terms(p, fluid);
@@ -157,7 +165,7 @@ void compute_density_rate(SphParticles<Dim>& p, const NeighbourLists& nbrs, cons
       const double q = std::sqrt(q2);
       const Vec<Dim> grad = 0.5 * (pressure_gradient<Dim>(fluid, xij, q, p.radius[i], terms[i].gradient_c) +
                                    pressure_gradient<Dim>(fluid, xij, q, p.radius[j], terms[j].gradient_c));
-      rate += p.mass[j] * (p.v[i] - p.v[j]).dot(grad);
+      rate += p.mass[j] * (velocity(i) - velocity(j)).dot(grad);
       if (fluid.density_diffusion > 0.0) {
         // delta h c sum_j V_j 2 (rho_j - rho_i - hydrostatic part) (x_ji . grad_i W) / |x_ij|^2, with h
         // half the mean support; the hydrostatic part rho_0^2 g . (x_j - x_i) / k is the density
@@ -170,7 +178,8 @@ void compute_density_rate(SphParticles<Dim>& p, const NeighbourLists& nbrs, cons
       }
     }
     if (walls)
-      rate += fluid.rest_density * walls->share_gradient(p.x[i], p.radius[i], fluid.kernels).dot(p.v[i]);
+      rate += wall_factor(fluid) * fluid.rest_density *
+              walls->share_gradient(p.x[i], p.radius[i], fluid.kernels).dot(velocity(i));
     p.drho[i] = rate;
   }
 }
@@ -197,8 +206,19 @@ void compute_accelerations(SphParticles<Dim>& p, const NeighbourLists& nbrs, con
         f += pair_force_at<Dim>(p, i, j, fluid, xij, std::sqrt(q2), terms[i], terms[j]);
     }
     p.a[i] = f / p.mass[i] + gravity;
+    if (walls && fluid.mirror_walls) {
+      // The mirrored liquid's pressure grows with depth as at rest; it is not pulled below zero
+      // above a particle near the free surface, so the growth is counted in full only for a
+      // particle at least a support radius deep (P_i >= rho_0 |g| r_i), in proportion above that.
+      const double g = gravity.norm();
+      const double deep =
+          g > 0.0 ? std::clamp(p.pressure[i] / (fluid.rest_density * g * p.radius[i]), 0.0, 1.0) : 0.0;
+      if (deep > 0.0)
+        p.a[i] -= deep * (fluid.rest_density * fluid.rest_density / (p.density[i] * p.density[i])) *
+                  walls->hydrostatic_gradient(p.x[i], p.radius[i], fluid.kernels, gravity);
+    }
     if (walls && p.pressure[i] != 0.0)
-      p.a[i] -= (p.pressure[i] * fluid.rest_density / (p.density[i] * p.density[i])) *
+      p.a[i] -= wall_factor(fluid) * (p.pressure[i] * fluid.rest_density / (p.density[i] * p.density[i])) *
                 walls->share_gradient(p.x[i], p.radius[i], fluid.kernels);
   }
 }
@@ -216,9 +236,9 @@ template Vec<3> pair_force<3>(const SphParticles<3>&, int, int, const FluidConst
 template void compute_pressure<2>(SphParticles<2>&, const FluidConstants&);
 template void compute_pressure<3>(SphParticles<3>&, const FluidConstants&);
 template void compute_density_rate<2>(SphParticles<2>&, const NeighbourLists&, const FluidConstants&,
-                                      const Vec<2>&, const Boundary<2>*);
+                                      const Vec<2>&, const Boundary<2>*, double);
 template void compute_density_rate<3>(SphParticles<3>&, const NeighbourLists&, const FluidConstants&,
-                                      const Vec<3>&, const Boundary<3>*);
+                                      const Vec<3>&, const Boundary<3>*, double);
 template void compute_accelerations<2>(SphParticles<2>&, const NeighbourLists&, const FluidConstants&,
                                        const Vec<2>&, const Boundary<2>*);
 template void compute_accelerations<3>(SphParticles<3>&, const NeighbourLists&, const FluidConstants&,

@@ -24,8 +24,9 @@
 //     explodes (10^3 J within 0.03 s, levels 0-3 without any further resampling). Carried by the
 //     continuity equation, with Molteni and Colagrossi's density diffusion (delta = 0.1), a split or
 //     merge keeps its parents' density: the same adaptive tank stays bounded (about 3 J, 0.4 m/s),
-//     the single one at 0.4-1.5 J. Continuity also needs dt <= 0.25 s / c (0.4 s / c grew without
-//     bound). Default continuity; summation one flag away.
+//     the single one at 0.4-1.5 J. Continuity also needed dt <= 0.25 s / c (0.4 s / c grew without
+//     bound) while its rate was taken at the step's starting velocities (an explicit Euler step of
+//     sound waves; see FluidConstants::kicked_density_rate). Default continuity; summation one flag away.
 //   - pressure form: `paper` is Eq. 1; `variational` replaces V_i V_j (P_i + P_j) with
 //     m_i m_j (P_i / rho_i^2 + P_j / rho_j^2) (equal to Eq. 1 where rho_i = rho_j); the two measured
 //     alike (0.023 and 0.014 J with spiky summation). Default Eq. 1.
@@ -64,13 +65,16 @@ template <int Dim>
 void compute_pressure(SphParticles<Dim>& p, const FluidConstants& fluid);
 
 /// The continuity equation's rate of density change, D rho_i / Dt = sum_j m_j (v_i - v_j) . gbar_ij
-/// plus the walls' rho_0 grad share . v_i, plus the density diffusion (delta-SPH) of the difference
-/// from the hydrostatic state under `gravity` (writes p.drho). OpenMP.
+/// plus the walls' rho_0 grad share . v_i (twice that with mirrored walls), plus the density diffusion
+/// (delta-SPH) of the difference from the hydrostatic state under `gravity` (writes p.drho). With
+/// `kick` > 0 the velocities are v + kick a (p.a current): the step's kicked velocities
+/// (FluidConstants::kicked_density_rate). OpenMP.
 template <int Dim>
 void compute_density_rate(SphParticles<Dim>& p, const NeighbourLists& nbrs, const FluidConstants& fluid,
-                          const Vec<Dim>& gravity, const Boundary<Dim>* walls = nullptr);
+                          const Vec<Dim>& gravity, const Boundary<Dim>* walls = nullptr, double kick = 0.0);
 
-/// Acceleration of every particle from the pair forces, the walls' pressure (when `walls` is given)
+/// Acceleration of every particle from the pair forces, the walls' pressure (when `walls` is given;
+/// twice -P_i rho_0 / rho_i^2 grad share with mirrored walls)
 /// and gravity (writes p.a); the density and pressure must be current. Each particle sums its own row
 /// (no write conflicts). OpenMP.
 template <int Dim>
