@@ -141,6 +141,7 @@ Vec<Dim> Boundary<Dim>::share_gradient(const Vec<Dim>& x, double r, KernelSet ke
 template <int Dim>
 Vec<Dim> Boundary<Dim>::hydrostatic_gradient(const Vec<Dim>& x, double r, KernelSet kernels,
                                              const Vec<Dim>& g) const {
+  // Summed over the walls near a corner (see the header for why not the product rule of share()).
   Vec<Dim> h = Vec<Dim>::Zero();
   for_each_wall(x, r, [&](double d, const Vec<Dim>& n) {
     h += (g.dot(n) * d * on_plane(kernels, d / r) / r) * n + beyond(kernels, d / r) * g;

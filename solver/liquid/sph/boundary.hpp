@@ -43,14 +43,17 @@ class Boundary {
   double share(const Vec<Dim>& x, double r, KernelSet kernels) const;
   /// The gradient of share() with respect to x (it points into the walls). The walls push a particle
   /// with a = -(P rho_0 / rho^2) grad share and, with a continuity density, change its density at
-  /// the rate rho_0 grad share . v.
+  /// the rate rho_0 grad share . v; twice each as the mirrored liquid (FluidConstants::mirror_walls).
   Vec<Dim> share_gradient(const Vec<Dim>& x, double r, KernelSet kernels) const;
 
   /// What the walls add to the pressure force where the mirrored liquid's pressure grows with depth
   /// as at rest, P_w(y) = P_i + rho_0 g . (y - x): the integral over the walls of
-  /// (P_w(y) - P_i) grad W(x - y) dy, per unit rho_0, summed over the walls within reach. For a wall
-  /// at distance d with normal n into the liquid, exactly: (g . n) d Pi(d) n + Phi(d) g, with Phi the
-  /// kernel mass beyond the wall and Pi its plane integral there.
+  /// (P_w(y) - P_i) grad W(x - y) dy, per unit rho_0, with the density kernel. For one wall at
+  /// distance d with normal n into the liquid, exactly: (g . n) d Pi(d) n + Phi(d) g, with Phi the
+  /// kernel mass beyond the wall and Pi its plane integral there. Near a corner the walls' terms are
+  /// summed, which counts the quadrant beyond both twice; measured against the integral over their
+  /// union (0.4 r and 0.3 r from two walls, 2D and 3D), the sum is 5% off and share()'s product rule
+  /// (the Phi g parts as (1 - prod_k (1 - Phi_k)) g) 6.6%: neither is exact, and the sum is simpler.
   Vec<Dim> hydrostatic_gradient(const Vec<Dim>& x, double r, KernelSet kernels, const Vec<Dim>& g) const;
 
   /// The nearest wall or obstacle closer to x than `reach`: its distance (0 from inside a solid) and,

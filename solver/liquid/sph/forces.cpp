@@ -28,10 +28,15 @@ const char* to_string(PressureForm form) {
 }
 
 namespace {
-/// The walls' terms as the liquid mirrored in them (its own pressure, its normal velocity reversed) see
-/// them: twice those of a wall at zero pressure and at rest (FluidConstants::mirror_walls).
+/// True when the walls act as the liquid mirrored in them (FluidConstants::mirror_walls): only with the
+/// continuity density, whose wall term doubles with the push. A summed density has no such term, and
+/// the doubled push alone would break the energy balance with the walls' share of the density.
+bool mirrored(const FluidConstants& fluid) {
+  return fluid.mirror_walls && fluid.density_update == DensityUpdate::continuity;
+}
+/// The walls' push and continuity term, mirrored: twice those of a wall at zero pressure and at rest.
 double wall_factor(const FluidConstants& fluid) {
-  return fluid.mirror_walls ? 2.0 : 1.0;
+  return mirrored(fluid) ? 2.0 : 1.0;
 }
 
 /// |x_i - x_j|^2 (given) < max(r_i, r_j)^2: beyond it every kernel of the pair is zero, and the lists may
@@ -81,14 +86,26 @@ inline Vec<Dim> pressure_gradient(const FluidConstants& fluid, const Vec<Dim>& x
                                               : Kernels<Dim>::spiky_gradient(x, q, r, c);
 }
 
+/// The pair's pressure-kernel gradient: the paper's average of the two particles' gradients, or with
+/// FluidConstants::mean_radius_gradient the gradient at their mean radius.
+template <int Dim>
+inline Vec<Dim> pair_gradient(const SphParticles<Dim>& p, int i, int j, const FluidConstants& fluid,
+                              const Vec<Dim>& xij, double q, const PairTerms& ti, const PairTerms& tj) {
+  if (fluid.mean_radius_gradient && p.radius[i] != p.radius[j]) {
+    const double r = 0.5 * (p.radius[i] + p.radius[j]);
+    return pressure_gradient<Dim>(fluid, xij, q, r, gradient_constant<Dim>(fluid, r));
+  }
+  return 0.5 * (pressure_gradient<Dim>(fluid, xij, q, p.radius[i], ti.gradient_c) +
+                pressure_gradient<Dim>(fluid, xij, q, p.radius[j], tj.gradient_c));
+}
+
 /// pair_force with x_ij, |x_ij| and both particles' terms given.
 template <int Dim>
 inline Vec<Dim> pair_force_at(const SphParticles<Dim>& p, int i, int j, const FluidConstants& fluid,
                               const Vec<Dim>& xij, double q, const PairTerms& ti, const PairTerms& tj) {
   using K = Kernels<Dim>;
   const double vv = ti.volume * tj.volume;
-  const Vec<Dim> grad = 0.5 * (pressure_gradient<Dim>(fluid, xij, q, p.radius[i], ti.gradient_c) +
-                               pressure_gradient<Dim>(fluid, xij, q, p.radius[j], tj.gradient_c));
+  const Vec<Dim> grad = pair_gradient<Dim>(p, i, j, fluid, xij, q, ti, tj);
   const double lap = 0.5 * (K::viscosity_laplacian(q, p.radius[i], ti.laplacian_c) +
                             K::viscosity_laplacian(q, p.radius[j], tj.laplacian_c));
   const double pressure = fluid.pressure_form == PressureForm::paper
@@ -151,7 +168,13 @@ template <int Dim>
 void compute_density_rate(SphParticles<Dim>& p, const NeighbourLists& nbrs, const FluidConstants& fluid,
                           const Vec<Dim>& gravity, const Boundary<Dim>* walls, double kick) {
   const int n = p.size();
-  auto velocity = [&](int k) -> Vec<Dim> { return kick == 0.0 ? p.v[k] : Vec<Dim>(p.v[k] + kick * p.a[k]); };
+  std::vector<Vec<Dim>> kicked;  // the velocities the rate is taken at, when they are not p.v
+  if (kick != 0.0) {
+    kicked.resize(n);
+#pragma omp parallel for schedule(static)
+    for (int i = 0; i < n; ++i) kicked[i] = p.v[i] + kick * p.a[i];
+  }
+  const std::vector<Vec<Dim>>& velocity = kick != 0.0 ? kicked : p.v;
   const double c = std::sqrt(fluid.stiffness / fluid.rest_density);
   const double hydrostatic = fluid.rest_density * fluid.rest_density / fluid.stiffness;
   const std::vector<PairTerms> terms = all_pair_terms(p, fluid);
@@ -163,9 +186,8 @@ void compute_density_rate(SphParticles<Dim>& p, const NeighbourLists& nbrs, cons
       const double q2 = xij.squaredNorm();
       if (!within_support(p, i, j, q2)) continue;
       const double q = std::sqrt(q2);
-      const Vec<Dim> grad = 0.5 * (pressure_gradient<Dim>(fluid, xij, q, p.radius[i], terms[i].gradient_c) +
-                                   pressure_gradient<Dim>(fluid, xij, q, p.radius[j], terms[j].gradient_c));
-      rate += p.mass[j] * (velocity(i) - velocity(j)).dot(grad);
+      const Vec<Dim> grad = pair_gradient<Dim>(p, i, j, fluid, xij, q, terms[i], terms[j]);
+      rate += p.mass[j] * (velocity[i] - velocity[j]).dot(grad);
       if (fluid.density_diffusion > 0.0) {
         // delta h c sum_j V_j 2 (rho_j - rho_i - hydrostatic part) (x_ji . grad_i W) / |x_ij|^2, with h
         // half the mean support; the hydrostatic part rho_0^2 g . (x_j - x_i) / k is the density
@@ -179,7 +201,7 @@ void compute_density_rate(SphParticles<Dim>& p, const NeighbourLists& nbrs, cons
     }
     if (walls)
       rate += wall_factor(fluid) * fluid.rest_density *
-              walls->share_gradient(p.x[i], p.radius[i], fluid.kernels).dot(velocity(i));
+              walls->share_gradient(p.x[i], p.radius[i], fluid.kernels).dot(velocity[i]);
     p.drho[i] = rate;
   }
 }
@@ -206,10 +228,11 @@ void compute_accelerations(SphParticles<Dim>& p, const NeighbourLists& nbrs, con
         f += pair_force_at<Dim>(p, i, j, fluid, xij, std::sqrt(q2), terms[i], terms[j]);
     }
     p.a[i] = f / p.mass[i] + gravity;
-    if (walls && fluid.mirror_walls) {
+    if (walls && mirrored(fluid)) {
       // The mirrored liquid's pressure grows with depth as at rest; it is not pulled below zero
       // above a particle near the free surface, so the growth is counted in full only for a
-      // particle at least a support radius deep (P_i >= rho_0 |g| r_i), in proportion above that.
+      // particle at least a support radius deep (P_i >= rho_0 |g| r_i), in proportion above that
+      // (a pressure raised by an impact reads as depth here).
       const double g = gravity.norm();
       const double deep =
           g > 0.0 ? std::clamp(p.pressure[i] / (fluid.rest_density * g * p.radius[i]), 0.0, 1.0) : 0.0;

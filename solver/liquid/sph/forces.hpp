@@ -67,16 +67,16 @@ void compute_pressure(SphParticles<Dim>& p, const FluidConstants& fluid);
 /// The continuity equation's rate of density change, D rho_i / Dt = sum_j m_j (v_i - v_j) . gbar_ij
 /// plus the walls' rho_0 grad share . v_i (twice that with mirrored walls), plus the density diffusion
 /// (delta-SPH) of the difference from the hydrostatic state under `gravity` (writes p.drho). With
-/// `kick` > 0 the velocities are v + kick a (p.a current): the step's kicked velocities
+/// `kick` != 0 the velocities are v + kick a (p.a current): the step's kicked velocities
 /// (FluidConstants::kicked_density_rate). OpenMP.
 template <int Dim>
 void compute_density_rate(SphParticles<Dim>& p, const NeighbourLists& nbrs, const FluidConstants& fluid,
                           const Vec<Dim>& gravity, const Boundary<Dim>* walls = nullptr, double kick = 0.0);
 
 /// Acceleration of every particle from the pair forces, the walls' pressure (when `walls` is given;
-/// twice -P_i rho_0 / rho_i^2 grad share with mirrored walls)
-/// and gravity (writes p.a); the density and pressure must be current. Each particle sums its own row
-/// (no write conflicts). OpenMP.
+/// twice -P_i rho_0 / rho_i^2 grad share with mirrored walls, plus the mirrored pressure's growth
+/// with depth under `gravity`, Boundary::hydrostatic_gradient) and gravity (writes p.a); the density
+/// and pressure must be current. Each particle sums its own row (no write conflicts). OpenMP.
 template <int Dim>
 void compute_accelerations(SphParticles<Dim>& p, const NeighbourLists& nbrs, const FluidConstants& fluid,
                            const Vec<Dim>& gravity, const Boundary<Dim>* walls = nullptr);
