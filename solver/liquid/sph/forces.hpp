@@ -7,7 +7,8 @@
 //   f_ij  = -V_i V_j (P_i + P_j) gbar_ij + mu V_i V_j (v_j - v_i) lbar_ij,     V_i = m_i / rho_i
 //   gbar_ij = (grad W(x_i - x_j, r_i) + grad W(x_i - x_j, r_j)) / 2 with W the pressure kernel
 //             (Wendland by default, spiky for the spiky and mueller sets), lbar_ij likewise for
-//             the viscosity kernel's Laplacian.
+//             the viscosity kernel's Laplacian. By default (FluidConstants::mean_radius_gradient)
+//             gbar_ij = grad W(x_i - x_j, (r_i + r_j) / 2) instead, measured stiller at mixed sizes.
 //
 // The gradient is taken with respect to x_i: the paper writes x_ij = x_j - x_i, with which Eq. 1 as
 // printed would attract. Eq. 1 carries no 1/2 on (P_i + P_j), unlike Müller et al.'s force density;
