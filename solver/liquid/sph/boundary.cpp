@@ -115,18 +115,20 @@ double Boundary<Dim>::share(const Vec<Dim>& x, double r, KernelSet kernels) cons
 }
 
 template <int Dim>
-Vec<Dim> Boundary<Dim>::share_gradient(const Vec<Dim>& x, double r, KernelSet kernels) const {
-  // The gradient of 1 - prod_k (1 - Phi_k): each wall's plane integral times the others' factors;
-  // Phi_k falls as the distance grows, so the gradient points into the walls.
-  struct Wall {
-    double beyond, on_plane;
-    Vec<Dim> n;
-  };
-  thread_local std::vector<Wall> walls;  // every wall within reach, as share() counts them
+const std::vector<typename Boundary<Dim>::NearWall>& Boundary<Dim>::near_walls(const Vec<Dim>& x, double r,
+                                                                               KernelSet kernels) const {
+  thread_local std::vector<NearWall> walls;  // every wall within reach, as share() counts them
   walls.clear();
   for_each_wall(x, r, [&](double d, const Vec<Dim>& n) {
-    walls.push_back(Wall{beyond(kernels, d / r), on_plane(kernels, d / r), n});
+    walls.push_back(NearWall{d, beyond(kernels, d / r), on_plane(kernels, d / r), n});
   });
+  return walls;
+}
+
+template <int Dim>
+Vec<Dim> Boundary<Dim>::share_gradient_of(const std::vector<NearWall>& walls, double r) {
+  // The gradient of 1 - prod_k (1 - Phi_k): each wall's plane integral times the others' factors;
+  // Phi_k falls as the distance grows, so the gradient points into the walls.
   const int count = static_cast<int>(walls.size());
   Vec<Dim> g = Vec<Dim>::Zero();
   for (int k = 0; k < count; ++k) {
@@ -139,14 +141,29 @@ Vec<Dim> Boundary<Dim>::share_gradient(const Vec<Dim>& x, double r, KernelSet ke
 }
 
 template <int Dim>
-Vec<Dim> Boundary<Dim>::hydrostatic_gradient(const Vec<Dim>& x, double r, KernelSet kernels,
-                                             const Vec<Dim>& g) const {
+Vec<Dim> Boundary<Dim>::hydrostatic_of(const std::vector<NearWall>& walls, double r, const Vec<Dim>& g) {
   // Summed over the walls near a corner (see the header for why not the product rule of share()).
   Vec<Dim> h = Vec<Dim>::Zero();
-  for_each_wall(x, r, [&](double d, const Vec<Dim>& n) {
-    h += (g.dot(n) * d * on_plane(kernels, d / r) / r) * n + beyond(kernels, d / r) * g;
-  });
+  for (const NearWall& w : walls) h += (g.dot(w.n) * w.distance * w.on_plane / r) * w.n + w.beyond * g;
   return h;
+}
+
+template <int Dim>
+Vec<Dim> Boundary<Dim>::share_gradient(const Vec<Dim>& x, double r, KernelSet kernels) const {
+  return share_gradient_of(near_walls(x, r, kernels), r);
+}
+
+template <int Dim>
+Vec<Dim> Boundary<Dim>::hydrostatic_gradient(const Vec<Dim>& x, double r, KernelSet kernels,
+                                             const Vec<Dim>& g) const {
+  return hydrostatic_of(near_walls(x, r, kernels), r, g);
+}
+
+template <int Dim>
+typename Boundary<Dim>::Push Boundary<Dim>::push(const Vec<Dim>& x, double r, KernelSet kernels,
+                                                 const Vec<Dim>& g) const {
+  const std::vector<NearWall>& walls = near_walls(x, r, kernels);
+  return {share_gradient_of(walls, r), hydrostatic_of(walls, r, g)};
 }
 
 template class Boundary<2>;

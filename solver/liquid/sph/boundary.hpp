@@ -56,6 +56,13 @@ class Boundary {
   /// (the Phi g parts as (1 - prod_k (1 - Phi_k)) g) 6.6%: neither is exact, and the sum is simpler.
   Vec<Dim> hydrostatic_gradient(const Vec<Dim>& x, double r, KernelSet kernels, const Vec<Dim>& g) const;
 
+  /// Both of the above from one walk over the walls (the pressure force needs both, and each walk
+  /// evaluates every obstacle's level set).
+  struct Push {
+    Vec<Dim> share_gradient, hydrostatic;
+  };
+  Push push(const Vec<Dim>& x, double r, KernelSet kernels, const Vec<Dim>& g) const;
+
   /// The nearest wall or obstacle closer to x than `reach`: its distance (0 from inside a solid) and,
   /// through `closest`, its point nearest x; infinite (and `closest` untouched) when none is.
   double nearest(const Vec<Dim>& x, double reach, Vec<Dim>* closest = nullptr) const;
@@ -68,6 +75,17 @@ class Boundary {
  private:
   template <class F>
   void for_each_wall(const Vec<Dim>& x, double r, F f) const;
+
+  /// A wall within reach of a particle: its distance, the kernel's mass beyond it and its plane
+  /// integral there (unit support), its normal into the liquid.
+  struct NearWall {
+    double distance, beyond, on_plane;
+    Vec<Dim> n;
+  };
+  /// Every wall within r of x (a thread's own list, overwritten by its next call).
+  const std::vector<NearWall>& near_walls(const Vec<Dim>& x, double r, KernelSet kernels) const;
+  static Vec<Dim> share_gradient_of(const std::vector<NearWall>& walls, double r);
+  static Vec<Dim> hydrostatic_of(const std::vector<NearWall>& walls, double r, const Vec<Dim>& g);
 
   Box<Dim> container_;
   bool has_container_ = false;

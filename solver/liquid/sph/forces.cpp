@@ -228,21 +228,24 @@ void compute_accelerations(SphParticles<Dim>& p, const NeighbourLists& nbrs, con
         f += pair_force_at<Dim>(p, i, j, fluid, xij, std::sqrt(q2), terms[i], terms[j]);
     }
     p.a[i] = f / p.mass[i] + gravity;
-    if (walls && mirrored(fluid)) {
-      // The mirrored liquid's pressure grows with depth as at rest; it is not pulled below zero
-      // above a particle near the free surface, so the growth is counted in full only for a
-      // particle at least a support radius deep (P_i >= rho_0 |g| r_i), in proportion above that
-      // (a pressure raised by an impact reads as depth here).
-      const double g = gravity.norm();
-      const double deep =
-          g > 0.0 ? std::clamp(p.pressure[i] / (fluid.rest_density * g * p.radius[i]), 0.0, 1.0) : 0.0;
-      if (deep > 0.0)
-        p.a[i] -= deep * (fluid.rest_density * fluid.rest_density / (p.density[i] * p.density[i])) *
-                  walls->hydrostatic_gradient(p.x[i], p.radius[i], fluid.kernels, gravity);
-    }
-    if (walls && p.pressure[i] != 0.0)
+    if (walls && p.pressure[i] != 0.0) {
+      // One walk over the walls for both terms (same expressions and order as two separate calls).
+      const typename Boundary<Dim>::Push push = walls->push(p.x[i], p.radius[i], fluid.kernels, gravity);
+      if (mirrored(fluid)) {
+        // The mirrored liquid's pressure grows with depth as at rest; it is not pulled below zero
+        // above a particle near the free surface, so the growth is counted in full only for a
+        // particle at least a support radius deep (P_i >= rho_0 |g| r_i), in proportion above that
+        // (a pressure raised by an impact reads as depth here).
+        const double g = gravity.norm();
+        const double deep =
+            g > 0.0 ? std::clamp(p.pressure[i] / (fluid.rest_density * g * p.radius[i]), 0.0, 1.0) : 0.0;
+        if (deep > 0.0)
+          p.a[i] -= deep * (fluid.rest_density * fluid.rest_density / (p.density[i] * p.density[i])) *
+                    push.hydrostatic;
+      }
       p.a[i] -= wall_factor(fluid) * (p.pressure[i] * fluid.rest_density / (p.density[i] * p.density[i])) *
-                walls->share_gradient(p.x[i], p.radius[i], fluid.kernels);
+                push.share_gradient;
+    }
   }
 }
 

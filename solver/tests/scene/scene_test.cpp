@@ -296,6 +296,7 @@ TEST(SphScene, EveryKeyRefusesABadValueByName) {
       {"spacing = 0.02\nkicked_density_rate = \"no\"",
        "key 'sph.kicked_density_rate': expected true or false"},
       {"spacing = 0.02\nmean_radius_gradient = 2", "key 'sph.mean_radius_gradient': expected true or false"},
+      {"spacing = 0.02\nmirror_walls = \"\"", "key 'sph.mirror_walls': expected true or false"},
       {"spacing = 0.02\nseed = -1", "key 'sph.seed': -1 is outside"},
       {"spacing = 0.02\nturn_angle = 1e9", "more than ten turns"},
       {"spacing = 0.02\nturn_angle = 90.0\nturn_duration = 0.0", "key 'sph.turn_duration': must be positive"},

@@ -144,6 +144,10 @@ void hydrostatic_push_is_the_integral_over_the_wall() {
   }
   sum *= std::pow(h, Dim);
   const Vec<Dim> formula = walls.hydrostatic_gradient(x, r, fluid.kernels, g);
+  // The force loop's one walk over the walls gives both terms as the separate calls do.
+  const auto both = walls.push(x, r, fluid.kernels, g);
+  EXPECT_EQ(both.hydrostatic, formula);
+  EXPECT_EQ(both.share_gradient, walls.share_gradient(x, r, fluid.kernels));
   EXPECT_LT((formula - sum).norm(), 1e-2 * sum.norm())
       << "formula " << formula.transpose() << ", integral " << sum.transpose();
   EXPECT_GT(sum.norm(), 0.0);
@@ -274,27 +278,38 @@ TEST(SphForces, CoincidentParticlesKeepAFiniteDensityRate) {
   EXPECT_LT(p.drho[1], p.drho[0]);
 }
 
+/// A level-0 lattice 0.2 deep in the tank [0, 0.4]^2 (s = 0.01) at the density of a liquid at rest
+/// under o.gravity, times 1 + `excess`, with its pressures and its accelerations against the tank.
+SphParticles<2> lattice_at_rest(SphOptions<2> o, double excess) {
+  o.container = Box<2>{Vec<2>(0, 0), Vec<2>(0.4, 0.4)};
+  o.spacing = 0.01;
+  o.adaptive = false;
+  const double depth = 0.2, g = -o.gravity[1];
+  AdaptiveSph<2> sim(o);
+  sim.seed(levelset::box<2>(Box<2>{Vec<2>(0, 0), Vec<2>(0.4, depth)}));
+  SphParticles<2> p = sim.particles();
+  for (int i = 0; i < p.size(); ++i)
+    p.density[i] = o.fluid.rest_density *
+                   (1.0 + excess + o.fluid.rest_density * g * (depth - p.x[i][1]) / o.fluid.stiffness);
+  const NeighbourLists nbrs = find_neighbours_cells<2>(p.x, p.radius);
+  const Boundary<2> walls(o.container, {});
+  compute_pressure<2>(p, o.fluid);
+  compute_accelerations<2>(p, nbrs, o.fluid, o.gravity, &walls);
+  return p;
+}
+
 /// The mean vertical acceleration of the floor row (away from the side walls) of a still lattice at
 /// uniform pressure (density 1% above rest, no gravity), and the walls' push on it, P / rho |grad share|.
 std::pair<double, double> floor_row_at_uniform_pressure(bool mirror_walls) {
   SphOptions<2> o;
-  o.container = Box<2>{Vec<2>(0, 0), Vec<2>(0.4, 0.4)};
-  o.spacing = 0.01;
-  o.adaptive = false;
   o.gravity.setZero();
   o.fluid.mirror_walls = mirror_walls;
-  AdaptiveSph<2> sim(o);
-  sim.seed(levelset::box<2>(Box<2>{Vec<2>(0, 0), Vec<2>(0.4, 0.2)}));
-  SphParticles<2> p = sim.particles();
-  for (double& rho : p.density) rho = 1.01 * o.fluid.rest_density;
-  const NeighbourLists nbrs = find_neighbours_cells<2>(p.x, p.radius);
-  const Boundary<2> walls(o.container, {});
-  compute_pressure<2>(p, o.fluid);
-  compute_accelerations<2>(p, nbrs, o.fluid, Vec<2>::Zero(), &walls);
+  const SphParticles<2> p = lattice_at_rest(o, 0.01);
+  const Boundary<2> walls(Box<2>{Vec<2>(0, 0), Vec<2>(0.4, 0.4)}, {});
   double a = 0.0, push = 0.0;
   int n = 0;
   for (int i = 0; i < p.size(); ++i)
-    if (p.x[i][1] < o.spacing && p.x[i][0] > 0.1 && p.x[i][0] < 0.3) {
+    if (p.x[i][1] < 0.01 && p.x[i][0] > 0.1 && p.x[i][0] < 0.3) {
       a += p.a[i][1], ++n;
       push +=
           p.pressure[i] / p.density[i] * walls.share_gradient(p.x[i], p.radius[i], o.fluid.kernels).norm();
@@ -317,29 +332,16 @@ TEST(SphBoundary, AMirroredWallBalancesAUniformPressure) {
 /// the middle, between depths 0.06 and 0.14, of a lattice 0.2 deep at the hydrostatic density.
 std::pair<double, double> side_column_at_rest(bool mirror_walls) {
   SphOptions<2> o;
-  o.container = Box<2>{Vec<2>(0, 0), Vec<2>(0.4, 0.4)};
-  o.spacing = 0.01;
-  o.adaptive = false;
   o.fluid.mirror_walls = mirror_walls;
   o.fluid.stiffness = o.fluid.rest_density * 20.0 * 20.0;
-  const double depth = 0.2, g = -o.gravity[1];
-  AdaptiveSph<2> sim(o);
-  sim.seed(levelset::box<2>(Box<2>{Vec<2>(0, 0), Vec<2>(0.4, depth)}));
-  SphParticles<2> p = sim.particles();
-  for (int i = 0; i < p.size(); ++i)
-    p.density[i] =
-        o.fluid.rest_density * (1.0 + o.fluid.rest_density * g * (depth - p.x[i][1]) / o.fluid.stiffness);
-  const NeighbourLists nbrs = find_neighbours_cells<2>(p.x, p.radius);
-  const Boundary<2> walls(o.container, {});
-  compute_pressure<2>(p, o.fluid);
-  compute_accelerations<2>(p, nbrs, o.fluid, o.gravity, &walls);
+  const SphParticles<2> p = lattice_at_rest(o, 0.0);
   double side = 0.0, middle = 0.0;
   int n_side = 0, n_middle = 0;
   for (int i = 0; i < p.size(); ++i) {
     const double y = p.x[i][1];
     if (y < 0.06 || y > 0.14) continue;
-    if (p.x[i][0] < o.spacing) side += p.a[i][1], ++n_side;
-    if (std::abs(p.x[i][0] - 0.2) < o.spacing) middle += p.a[i][1], ++n_middle;
+    if (p.x[i][0] < 0.01) side += p.a[i][1], ++n_side;
+    if (std::abs(p.x[i][0] - 0.2) < 0.01) middle += p.a[i][1], ++n_middle;
   }
   return {side / n_side, middle / n_middle};
 }
