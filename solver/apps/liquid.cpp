@@ -271,8 +271,11 @@ void print_sph_summary(const SphRunSummary& s, const std::string& name, int dim)
     levels += fmt::format("{}{:.0f}", l ? " / " : "", s.per_level[l]);
   fmt::print("  particles per level (mean): {}; fewest {}, most {}\n", levels, s.min_particles,
              s.max_particles);
-  fmt::print("  split {}, merged {}, added by sources {}; largest density error {:.3g}%\n", s.split, s.merged,
-             s.emitted, 100 * s.max_density_error);
+  fmt::print("  split {}, merged {}, added by sources {}\n", s.split, s.merged, s.emitted);
+  fmt::print(
+      "  largest compression {:.3g}%; largest density error {:.3g}% (with spray and fragments, which expand "
+      "at zero pressure); at most {} particles alone at once (their densities set to rest)\n",
+      100 * s.max_compression, 100 * s.max_density_error, s.rested);
   fmt::print("  spacing {:.4g} m, sound speed {:.3g} m/s\n", s.spacing, s.sound_speed);
   fmt::print("  seconds per step by phase:");
   for (const auto& [phase, t] : s.seconds) fmt::print(" {} {:.5f}", phase, t);
@@ -292,12 +295,13 @@ void write_sph_json(const std::string& path, const SphRunSummary& s, const std::
           "\"threads\": {},\n  \"particles\": {:.6g}, \"single_particles\": {:.6g}, \"min_particles\": {}, "
           "\"max_particles\": {},\n  \"particles_per_level\": [{}], \"split\": {}, \"merged\": {}, "
           "\"emitted\": {},\n"
-          "  \"max_density_error\": {:.6g}, \"spacing\": {:.6g}, \"sound_speed\": {:.6g}, \"wall_seconds\": "
+          "  \"max_density_error\": {:.6g}, \"max_compression\": {:.6g}, \"rested\": {}, \"spacing\": "
+          "{:.6g}, \"sound_speed\": {:.6g}, \"wall_seconds\": "
           "{:.6g},\n"
           "  \"seconds_per_step\": {{{}}}\n}}\n",
           name, dim, s.steps, s.time, s.threads, s.particles, s.single_particles, s.min_particles,
-          s.max_particles, levels, s.split, s.merged, s.emitted, s.max_density_error, s.spacing,
-          s.sound_speed, s.wall, phases));
+          s.max_particles, levels, s.split, s.merged, s.emitted, s.max_density_error, s.max_compression,
+          s.rested, s.spacing, s.sound_speed, s.wall, phases));
 }
 
 RunSettings settings_of(const Args& a, const std::string& scene_path) {

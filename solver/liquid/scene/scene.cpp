@@ -324,7 +324,8 @@ const std::vector<std::string> sph_keys = {"spacing",
                                            "wall_footpoints",
                                            "mirror_walls",
                                            "kicked_density_rate",
-                                           "mean_radius_gradient"};
+                                           "mean_radius_gradient",
+                                           "free_particles_at_rest"};
 
 /// The value of `choices` whose name (to_string) is `name`.
 template <class E>
@@ -378,6 +379,7 @@ void read_sph(const TableReader& r, Scene<Dim>& s) {
   o.fluid.mirror_walls = r.boolean("mirror_walls", o.fluid.mirror_walls);
   o.fluid.kicked_density_rate = r.boolean("kicked_density_rate", o.fluid.kicked_density_rate);
   o.fluid.mean_radius_gradient = r.boolean("mean_radius_gradient", o.fluid.mean_radius_gradient);
+  o.fluid.free_particles_at_rest = r.boolean("free_particles_at_rest", o.fluid.free_particles_at_rest);
   o.fluid.rest_density = r.positive("rest_density", o.fluid.rest_density);
   if (r.has("sound_speed")) sc.sound_speed = r.positive("sound_speed");
   o.fluid.viscosity = r.number("viscosity", o.fluid.viscosity);

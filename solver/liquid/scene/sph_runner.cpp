@@ -109,6 +109,8 @@ const sph::SphStepReport& SphSceneRunner<Dim>::step() {
   }
   sum_single_ += single;
   max_density_error_ = std::max(max_density_error_, last_.max_density_error);
+  max_compression_ = std::max(max_compression_, last_.max_compression);
+  rested_ = std::max<long>(rested_, last_.rested);
   if (settings_.frames && !settings_.out.empty() &&
       (done() || detail::frame_due(scene_.output, sim_->time(), next_frame_)))
     write_frame();
@@ -208,10 +210,10 @@ std::string SphSceneRunner<Dim>::checkpoint() {
   w.put_string("sph/rng", st.rng);
   w.put_scalar("run/frame", static_cast<std::int64_t>(frame_));
   w.put_scalar("run/next_frame", next_frame_);
-  const std::vector<std::int64_t> counts = {steps_,   split_,         merged_,
-                                            emitted_, min_particles_, max_particles_};
+  const std::vector<std::int64_t> counts = {steps_,         split_,         merged_, emitted_,
+                                            min_particles_, max_particles_, rested_};
   w.put("run/counts", std::span<const std::int64_t>(counts));
-  const std::vector<double> sums = {sum_particles_, sum_single_, max_density_error_};
+  const std::vector<double> sums = {sum_particles_, sum_single_, max_density_error_, max_compression_};
   w.put("run/sums", std::span<const double>(sums));
   w.put("run/per_level", std::span<const double>(sum_per_level_));
   detail::put_series(w, io_->series.get());
@@ -263,12 +265,17 @@ SphSceneRunner<Dim> SphSceneRunner<Dim>::resume(const std::string& checkpoint, R
   run.next_frame_ = r.scalar_double("run/next_frame");
   const std::vector<std::int64_t> counts = r.int64s("run/counts");
   const std::vector<double> sums = r.doubles("run/sums"), per_level = r.doubles("run/per_level");
-  LIQUID_VERIFY(counts.size() == 6 && sums.size() == 3 && per_level.size() == run.sum_per_level_.size(),
+  // Checkpoints written before the compression and the rested count were kept have 6 counts and 3 sums:
+  // those two then count from the resumed step on.
+  LIQUID_VERIFY((counts.size() == 6 || counts.size() == 7) && (sums.size() == 3 || sums.size() == 4) &&
+                    per_level.size() == run.sum_per_level_.size(),
                 "{}: the run's sums have the wrong sizes (levels {} saved, the scene has {})", checkpoint,
                 per_level.size(), run.sum_per_level_.size());
   run.steps_ = counts[0], run.split_ = counts[1], run.merged_ = counts[2], run.emitted_ = counts[3];
   run.min_particles_ = static_cast<int>(counts[4]), run.max_particles_ = static_cast<int>(counts[5]);
   run.sum_particles_ = sums[0], run.sum_single_ = sums[1], run.max_density_error_ = sums[2];
+  if (counts.size() > 6) run.rested_ = counts[6];
+  if (sums.size() > 3) run.max_compression_ = sums[3];
   run.sum_per_level_ = per_level;
   if (run.io_->series) {
     std::vector<io::SeriesFrame> frames = detail::get_series(r);
@@ -290,6 +297,8 @@ SphRunSummary SphSceneRunner<Dim>::summary() const {
   for (double c : sum_per_level_) s.per_level.push_back(c / n);
   s.split = split_, s.merged = merged_, s.emitted = emitted_;
   s.max_density_error = max_density_error_;
+  s.max_compression = max_compression_;
+  s.rested = rested_;
   const PhaseTimer& t = sim_->timer();
   const auto total = t.entries().find("total");
   const double calls = total == t.entries().end() ? 1.0 : std::max<double>(total->second.calls, 1.0);

@@ -42,7 +42,11 @@ struct SphRunSummary {
   double single_particles = 0.0;
   std::vector<double> per_level;  ///< average particles of each level per step
   long split = 0, merged = 0, emitted = 0;
-  double max_density_error = 0.0;         ///< the largest |rho / rho_0 - 1| of any step
+  double max_density_error = 0.0;  ///< the largest |rho / rho_0 - 1| of any step
+  double max_compression = 0.0;    ///< the largest rho / rho_0 - 1 of any step
+  /// The most particles alone in one step, whose densities were set to rho_0
+  /// (FluidConstants::free_particles_at_rest).
+  long rested = 0;
   std::map<std::string, double> seconds;  ///< per phase, average per step
   double sound_speed = 0.0, spacing = 0.0;
   int threads = 1;
@@ -89,6 +93,8 @@ class SphSceneRunner {
   long steps_ = 0, split_ = 0, merged_ = 0, emitted_ = 0;
   int min_particles_ = 0, max_particles_ = 0;
   double sum_particles_ = 0.0, sum_single_ = 0.0, max_density_error_ = 0.0, wall_ = 0.0;
+  double max_compression_ = 0.0;
+  long rested_ = 0;
   std::vector<double> sum_per_level_;
   std::vector<std::string> written_;
 };

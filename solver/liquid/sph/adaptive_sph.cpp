@@ -556,6 +556,8 @@ SphStepReport AdaptiveSph<Dim>::advance(double dt) {
     if (options_.fluid.density_update == DensityUpdate::summation) {
       compute_density<Dim>(p_, nbrs_, options_.fluid, &walls_);
     } else {
+      if (options_.fluid.free_particles_at_rest)
+        report.rested = rest_free_particles<Dim>(p_, nbrs_, options_.fluid, &walls_);
       compute_pressure<Dim>(p_, options_.fluid);
     }
     compute_accelerations<Dim>(p_, nbrs_, options_.fluid, gravity, &walls_);
@@ -566,8 +568,9 @@ SphStepReport AdaptiveSph<Dim>::advance(double dt) {
     for (int i = 0; i < p_.size(); ++i) {
       if (!std::isfinite(p_.density[i]) || !std::isfinite(p_.drho[i]) || !p_.a[i].allFinite())
         throw_not_finite(i);
-      report.max_density_error =
-          std::max(report.max_density_error, std::abs(p_.density[i] / options_.fluid.rest_density - 1.0));
+      const double excess = p_.density[i] / options_.fluid.rest_density - 1.0;
+      report.max_density_error = std::max(report.max_density_error, std::abs(excess));
+      report.max_compression = std::max(report.max_compression, excess);
     }
   }
   if (resampling) redistance_and_resample(report);
@@ -580,7 +583,19 @@ SphStepReport AdaptiveSph<Dim>::advance(double dt) {
       p_.x[i] += dt * p_.v[i];
     }
     if (options_.fluid.density_update == DensityUpdate::continuity)
-      for (int i = 0; i < n; ++i) p_.density[i] += dt * p_.drho[i];
+      for (int i = 0; i < n; ++i) {
+        const double before = p_.density[i];
+        p_.density[i] += dt * p_.drho[i];
+        // A density at or below zero makes the particle's volume infinite and every pair with it
+        // NaN: stop here, at the particle, rather than at the first neighbour the NaN reaches.
+        if (!(p_.density[i] > 0.0))
+          throw Error(fmt::format(
+              "sph: particle {} (level {}) at step {}, t = {} s: its density fell from {:.6g} to {:.6g} "
+              "(rate {:.6g} over dt = {:.3g} s); the step is too large for this flow (lower the scene's "
+              "[time] cfl); position ({}), velocity ({})",
+              i, int(p_.level[i]), steps_, time_, before, p_.density[i], p_.drho[i], dt,
+              fmt::join(p_.x[i], ", "), fmt::join(p_.v[i], ", ")));
+      }
   }
   {
     auto t = timer_.scope("collisions");

@@ -148,7 +148,13 @@ struct SphStepReport {
   ResampleStats resampling;
   double max_speed = 0.0;
   double max_density_error = 0.0;  ///< max |rho_i / rho_0 - 1| over particles, at the forces
-  int emitted = 0;                 ///< particles the sources added this step
+  /// max (rho_i / rho_0 - 1, 0) over particles, at the forces: the compression that makes pressure.
+  /// The density error also counts spray and fragments, which expand freely at zero pressure.
+  double max_compression = 0.0;
+  int emitted = 0;  ///< particles the sources added this step
+  /// Particles alone (no particle or wall within their support) whose density was set to rho_0
+  /// (FluidConstants::free_particles_at_rest).
+  int rested = 0;
 };
 
 /// What a checkpoint keeps of an AdaptiveSph: its particles, clock and split directions' random

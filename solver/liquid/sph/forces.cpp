@@ -207,6 +207,27 @@ void compute_density_rate(SphParticles<Dim>& p, const NeighbourLists& nbrs, cons
 }
 
 template <int Dim>
+int rest_free_particles(SphParticles<Dim>& p, const NeighbourLists& nbrs, const FluidConstants& fluid,
+                        const Boundary<Dim>* walls) {
+  const int n = p.size();
+  int freed = 0;
+#pragma omp parallel for schedule(static) reduction(+ : freed)
+  for (int i = 0; i < n; ++i) {
+    bool alone = true;
+    for (int j : nbrs.of(i))
+      if (within_support(p, i, j, (p.x[i] - p.x[j]).squaredNorm())) {
+        alone = false;
+        break;
+      }
+    if (!alone || (walls && walls->share(p.x[i], p.radius[i], fluid.kernels) > 0.0)) continue;
+    // Every particle that could read this density in a sum is within its support: none does.
+    p.density[i] = fluid.rest_density;
+    ++freed;
+  }
+  return freed;
+}
+
+template <int Dim>
 Vec<Dim> pair_force(const SphParticles<Dim>& p, int i, int j, const FluidConstants& fluid) {
   const Vec<Dim> xij = p.x[i] - p.x[j];
   return pair_force_at<Dim>(p, i, j, fluid, xij, xij.norm(), pair_terms(p, i, fluid),
@@ -265,6 +286,10 @@ template void compute_density_rate<2>(SphParticles<2>&, const NeighbourLists&, c
                                       const Vec<2>&, const Boundary<2>*, double);
 template void compute_density_rate<3>(SphParticles<3>&, const NeighbourLists&, const FluidConstants&,
                                       const Vec<3>&, const Boundary<3>*, double);
+template int rest_free_particles<2>(SphParticles<2>&, const NeighbourLists&, const FluidConstants&,
+                                    const Boundary<2>*);
+template int rest_free_particles<3>(SphParticles<3>&, const NeighbourLists&, const FluidConstants&,
+                                    const Boundary<3>*);
 template void compute_accelerations<2>(SphParticles<2>&, const NeighbourLists&, const FluidConstants&,
                                        const Vec<2>&, const Boundary<2>*);
 template void compute_accelerations<3>(SphParticles<3>&, const NeighbourLists&, const FluidConstants&,

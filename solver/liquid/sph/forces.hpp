@@ -74,6 +74,12 @@ template <int Dim>
 void compute_density_rate(SphParticles<Dim>& p, const NeighbourLists& nbrs, const FluidConstants& fluid,
                           const Vec<Dim>& gravity, const Boundary<Dim>* walls = nullptr, double kick = 0.0);
 
+/// FluidConstants::free_particles_at_rest: sets rho_0 as the density of every particle with no other
+/// particle and no wall within its support; returns how many. OpenMP.
+template <int Dim>
+int rest_free_particles(SphParticles<Dim>& p, const NeighbourLists& nbrs, const FluidConstants& fluid,
+                        const Boundary<Dim>* walls = nullptr);
+
 /// Acceleration of every particle from the pair forces, the walls' pressure (when `walls` is given;
 /// twice -P_i rho_0 / rho_i^2 grad share with mirrored walls, plus the mirrored pressure's growth
 /// with depth under `gravity`, Boundary::hydrostatic_gradient) and gravity (writes p.a); the density

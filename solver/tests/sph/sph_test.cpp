@@ -278,6 +278,51 @@ TEST(SphForces, CoincidentParticlesKeepAFiniteDensityRate) {
   EXPECT_LT(p.drho[1], p.drho[0]);
 }
 
+TEST(SphForces, AParticleAloneTakesTheRestDensity) {
+  // Spray in flight keeps the density it left the liquid with unless it is set to rho_0: alone (no
+  // particle, no wall within its support) it is liquid at the ambient pressure.
+  Sizes sizes;
+  sizes.radius = 0.05;
+  SphParticles<2> p;
+  p.add(sizes, Vec<2>(0.5, 0.5), Vec<2>(1.0, 2.0), 0, 0.0, 644.0);   // alone
+  p.add(sizes, Vec<2>(0.2, 0.2), Vec<2>(0.0, 0.0), 0, 0.0, 1300.0);  // alone, compressed
+  p.add(sizes, Vec<2>(0.7, 0.7), Vec<2>(0.0, 0.0), 0, 0.0, 900.0);   // a pair, 0.04 apart
+  p.add(sizes, Vec<2>(0.74, 0.7), Vec<2>(0.0, 0.0), 0, 0.0, 950.0);
+  p.add(sizes, Vec<2>(0.5, 0.03), Vec<2>(0.0, 0.0), 0, 0.0, 800.0);  // alone, 0.03 above the floor
+  const NeighbourLists nbrs = find_neighbours_cells<2>(p.x, p.radius);
+  const Boundary<2> walls(Box<2>{Vec<2>(0, 0), Vec<2>(1, 1)}, {});
+  FluidConstants fluid;
+  EXPECT_EQ(rest_free_particles<2>(p, nbrs, fluid, &walls), 2);
+  EXPECT_EQ(p.density[0], fluid.rest_density);
+  EXPECT_EQ(p.density[1], fluid.rest_density);
+  EXPECT_EQ(p.density[2], 900.0) << "a particle with a neighbour keeps its density";
+  EXPECT_EQ(p.density[3], 950.0);
+  EXPECT_EQ(p.density[4], 800.0) << "a particle within reach of a wall keeps its density";
+}
+
+TEST(AdaptiveSph, NamesTheParticleWhoseDensityFallsToZero) {
+  // Two particles flying apart faster than the step allows: the continuity density of each falls
+  // below zero in one step. The run stops there, naming the particle and the step, not at the NaN
+  // that the infinite volume would put into its neighbours' sums one step later.
+  SphOptions<2> o;
+  o.container = Box<2>{Vec<2>(0, 0), Vec<2>(1, 1)};
+  o.spacing = 0.02;
+  o.adaptive = false;
+  o.gravity = Vec<2>::Zero();
+  AdaptiveSph<2> sim(o);
+  sim.seed(levelset::box<2>(Box<2>{Vec<2>(0.46, 0.48), Vec<2>(0.54, 0.52)}));
+  auto& p = sim.particles();
+  ASSERT_GE(p.size(), 2);
+  for (int i = 0; i < p.size(); ++i) p.v[i] = Vec<2>(p.x[i][0] < 0.5 ? -50.0 : 50.0, 0.0);
+  try {
+    for (int k = 0; k < 10; ++k) sim.advance(1e-3);
+    FAIL() << "a density at or below zero went unnoticed";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("its density fell from"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("[time] cfl"), std::string::npos) << e.what();
+  }
+}
+
 /// A level-0 lattice 0.2 deep in the tank [0, 0.4]^2 (s = 0.01) at the density of a liquid at rest
 /// under o.gravity, times 1 + `excess`, with its pressures and its accelerations against the tank.
 SphParticles<2> lattice_at_rest(SphOptions<2> o, double excess) {
