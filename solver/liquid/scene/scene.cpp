@@ -325,7 +325,8 @@ const std::vector<std::string> sph_keys = {"spacing",
                                            "mirror_walls",
                                            "kicked_density_rate",
                                            "mean_radius_gradient",
-                                           "free_particles_at_rest"};
+                                           "free_particles_at_rest",
+                                           "shifting"};
 
 /// The value of `choices` whose name (to_string) is `name`.
 template <class E>
@@ -380,6 +381,9 @@ void read_sph(const TableReader& r, Scene<Dim>& s) {
   o.fluid.kicked_density_rate = r.boolean("kicked_density_rate", o.fluid.kicked_density_rate);
   o.fluid.mean_radius_gradient = r.boolean("mean_radius_gradient", o.fluid.mean_radius_gradient);
   o.fluid.free_particles_at_rest = r.boolean("free_particles_at_rest", o.fluid.free_particles_at_rest);
+  o.fluid.shifting = r.number("shifting", o.fluid.shifting);
+  LIQUID_VERIFY(o.fluid.shifting >= 0.0 && o.fluid.shifting <= 0.1, "{}: {} is outside [0, 0.1]",
+                r.where("shifting"), o.fluid.shifting);
   o.fluid.rest_density = r.positive("rest_density", o.fluid.rest_density);
   if (r.has("sound_speed")) sc.sound_speed = r.positive("sound_speed");
   o.fluid.viscosity = r.number("viscosity", o.fluid.viscosity);

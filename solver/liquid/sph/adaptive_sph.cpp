@@ -83,6 +83,8 @@ void SphOptions<Dim>::check() const {
                 "sph: the footpoint disks' radius must be within (0, 1] support radii, not {}", disk_radius);
   LIQUID_VERIFY(fluid.density_diffusion >= 0.0 && fluid.density_diffusion <= 1.0,
                 "sph: the density diffusion delta must be within [0, 1], not {}", fluid.density_diffusion);
+  LIQUID_VERIFY(fluid.shifting >= 0.0 && fluid.shifting <= 0.1,
+                "sph: the shifting coefficient must be within [0, 0.1], not {}", fluid.shifting);
   LIQUID_VERIFY(restitution >= 0.0 && restitution <= 1.0, "sph: restitution must be within [0, 1], not {}",
                 restitution);
   LIQUID_VERIFY(gravity.allFinite(), "sph: gravity must be finite");
@@ -550,6 +552,8 @@ SphStepReport AdaptiveSph<Dim>::advance(double dt) {
       tree_.build(p_.x);
   }
   report.pairs = nbrs_.n_pairs();
+  // FluidConstants::shifting: the gradient of the kernel's partition of unity, from the rate's pairs.
+  std::vector<Vec<Dim>> shift;
   {
     auto t = timer_.scope("forces");
     const Vec<Dim> gravity = gravity_at(time_);
@@ -564,7 +568,8 @@ SphStepReport AdaptiveSph<Dim>::advance(double dt) {
     if (options_.rotation.active()) add_frame_accelerations(dt);
     if (options_.fluid.density_update == DensityUpdate::continuity)
       compute_density_rate<Dim>(p_, nbrs_, options_.fluid, gravity, &walls_,
-                                options_.fluid.kicked_density_rate ? dt : 0.0);
+                                options_.fluid.kicked_density_rate ? dt : 0.0,
+                                options_.fluid.shifting > 0.0 ? &shift : nullptr);
     for (int i = 0; i < p_.size(); ++i) {
       if (!std::isfinite(p_.density[i]) || !std::isfinite(p_.drho[i]) || !p_.a[i].allFinite())
         throw_not_finite(i);
@@ -574,6 +579,9 @@ SphStepReport AdaptiveSph<Dim>::advance(double dt) {
     }
   }
   if (resampling) redistance_and_resample(report);
+  // Split or merged particles have no shift of their own: none this step.
+  if (static_cast<int>(shift.size()) != p_.size() || report.resampling.split + report.resampling.merged > 0)
+    shift.clear();
   {
     auto t = timer_.scope("integrate");
     const int n = p_.size();
@@ -581,6 +589,8 @@ SphStepReport AdaptiveSph<Dim>::advance(double dt) {
     for (int i = 0; i < n; ++i) {
       p_.v[i] += dt * p_.a[i];
       p_.x[i] += dt * p_.v[i];
+      if (!shift.empty() && p_.distance[i] >= p_.radius[i])
+        p_.x[i] -= (options_.fluid.shifting * p_.radius[i] * p_.radius[i]) * shift[i];
     }
     if (options_.fluid.density_update == DensityUpdate::continuity)
       for (int i = 0; i < n; ++i) {

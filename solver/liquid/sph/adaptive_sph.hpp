@@ -10,7 +10,8 @@
 //   elfs        (every k-th step, adaptive) medial axis and extended local feature size (plus the
 //               distance to the view, with SphOptions::view)
 //   resample    (every k-th step, adaptive) split and merge
-//   integrate   leap-frog: v += dt a, x += dt v (velocities live at half steps)
+//   integrate   leap-frog: v += dt a, x += dt v (velocities live at half steps), plus the particle
+//               shift (FluidConstants::shifting) away from crowded parts of the liquid
 //   collisions  particles pushed out of obstacles and back into the container, inward velocity removed
 //   total
 // With adaptive = false every particle stays at level 0 (the single-resolution simulation the paper

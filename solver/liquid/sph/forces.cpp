@@ -166,7 +166,8 @@ void compute_pressure(SphParticles<Dim>& p, const FluidConstants& fluid) {
 
 template <int Dim>
 void compute_density_rate(SphParticles<Dim>& p, const NeighbourLists& nbrs, const FluidConstants& fluid,
-                          const Vec<Dim>& gravity, const Boundary<Dim>* walls, double kick) {
+                          const Vec<Dim>& gravity, const Boundary<Dim>* walls, double kick,
+                          std::vector<Vec<Dim>>* concentration) {
   const int n = p.size();
   std::vector<Vec<Dim>> kicked;  // the velocities the rate is taken at, when they are not p.v
   if (kick != 0.0) {
@@ -178,9 +179,11 @@ void compute_density_rate(SphParticles<Dim>& p, const NeighbourLists& nbrs, cons
   const double c = std::sqrt(fluid.stiffness / fluid.rest_density);
   const double hydrostatic = fluid.rest_density * fluid.rest_density / fluid.stiffness;
   const std::vector<PairTerms> terms = all_pair_terms(p, fluid);
+  if (concentration) concentration->assign(n, Vec<Dim>::Zero());
 #pragma omp parallel for schedule(static)
   for (int i = 0; i < n; ++i) {
     double rate = 0.0;
+    Vec<Dim> gc = Vec<Dim>::Zero();
     for (int j : nbrs.of(i)) {
       const Vec<Dim> xij = p.x[i] - p.x[j];
       const double q2 = xij.squaredNorm();
@@ -188,6 +191,7 @@ void compute_density_rate(SphParticles<Dim>& p, const NeighbourLists& nbrs, cons
       const double q = std::sqrt(q2);
       const Vec<Dim> grad = pair_gradient<Dim>(p, i, j, fluid, xij, q, terms[i], terms[j]);
       rate += p.mass[j] * (velocity[i] - velocity[j]).dot(grad);
+      gc += terms[j].volume * grad;
       if (fluid.density_diffusion > 0.0) {
         // delta h c sum_j V_j 2 (rho_j - rho_i - hydrostatic part) (x_ji . grad_i W) / |x_ij|^2, with h
         // half the mean support; the hydrostatic part rho_0^2 g . (x_j - x_i) / k is the density
@@ -199,10 +203,13 @@ void compute_density_rate(SphParticles<Dim>& p, const NeighbourLists& nbrs, cons
                 (xij.squaredNorm() + 0.01 * h * h);
       }
     }
-    if (walls)
-      rate += wall_factor(fluid) * fluid.rest_density *
-              walls->share_gradient(p.x[i], p.radius[i], fluid.kernels).dot(velocity[i]);
+    if (walls) {
+      const Vec<Dim> share = walls->share_gradient(p.x[i], p.radius[i], fluid.kernels);
+      rate += wall_factor(fluid) * fluid.rest_density * share.dot(velocity[i]);
+      gc += share;
+    }
     p.drho[i] = rate;
+    if (concentration) (*concentration)[i] = gc;
   }
 }
 
@@ -283,9 +290,9 @@ template Vec<3> pair_force<3>(const SphParticles<3>&, int, int, const FluidConst
 template void compute_pressure<2>(SphParticles<2>&, const FluidConstants&);
 template void compute_pressure<3>(SphParticles<3>&, const FluidConstants&);
 template void compute_density_rate<2>(SphParticles<2>&, const NeighbourLists&, const FluidConstants&,
-                                      const Vec<2>&, const Boundary<2>*, double);
+                                      const Vec<2>&, const Boundary<2>*, double, std::vector<Vec<2>>*);
 template void compute_density_rate<3>(SphParticles<3>&, const NeighbourLists&, const FluidConstants&,
-                                      const Vec<3>&, const Boundary<3>*, double);
+                                      const Vec<3>&, const Boundary<3>*, double, std::vector<Vec<3>>*);
 template int rest_free_particles<2>(SphParticles<2>&, const NeighbourLists&, const FluidConstants&,
                                     const Boundary<2>*);
 template int rest_free_particles<3>(SphParticles<3>&, const NeighbourLists&, const FluidConstants&,

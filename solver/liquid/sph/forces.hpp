@@ -69,10 +69,14 @@ void compute_pressure(SphParticles<Dim>& p, const FluidConstants& fluid);
 /// plus the walls' rho_0 grad share . v_i (twice that with mirrored walls), plus the density diffusion
 /// (delta-SPH) of the difference from the hydrostatic state under `gravity` (writes p.drho). With
 /// `kick` != 0 the velocities are v + kick a (p.a current): the step's kicked velocities
-/// (FluidConstants::kicked_density_rate). OpenMP.
+/// (FluidConstants::kicked_density_rate). With `concentration`, also writes there, per particle, the
+/// gradient of C_i = sum_j V_j W(x_ij) + the walls' share with the same pair gradients: the kernel's
+/// partition of unity, 1 wherever the particles' volumes tile the space (FluidConstants::shifting).
+/// OpenMP.
 template <int Dim>
 void compute_density_rate(SphParticles<Dim>& p, const NeighbourLists& nbrs, const FluidConstants& fluid,
-                          const Vec<Dim>& gravity, const Boundary<Dim>* walls = nullptr, double kick = 0.0);
+                          const Vec<Dim>& gravity, const Boundary<Dim>* walls = nullptr, double kick = 0.0,
+                          std::vector<Vec<Dim>>* concentration = nullptr);
 
 /// FluidConstants::free_particles_at_rest: sets rho_0 as the density of every particle with no other
 /// particle and no wall within its support; returns how many. OpenMP.

@@ -298,6 +298,7 @@ TEST(SphScene, EveryKeyRefusesABadValueByName) {
       {"spacing = 0.02\nmean_radius_gradient = 2", "key 'sph.mean_radius_gradient': expected true or false"},
       {"spacing = 0.02\nfree_particles_at_rest = 1",
        "key 'sph.free_particles_at_rest': expected true or false"},
+      {"spacing = 0.02\nshifting = 0.5", "key 'sph.shifting': 0.5 is outside"},
       {"spacing = 0.02\nmirror_walls = \"\"", "key 'sph.mirror_walls': expected true or false"},
       {"spacing = 0.02\nseed = -1", "key 'sph.seed': -1 is outside"},
       {"spacing = 0.02\nturn_angle = 1e9", "more than ten turns"},

@@ -300,6 +300,34 @@ TEST(SphForces, AParticleAloneTakesTheRestDensity) {
   EXPECT_EQ(p.density[4], 800.0) << "a particle within reach of a wall keeps its density";
 }
 
+TEST(SphForces, ConcentrationGradientPointsIntoACrowding) {
+  // FluidConstants::shifting moves a particle down grad C, C = sum_j V_j W(x_ij): on a lattice C is
+  // flat, and a particle pushed towards its right neighbour sees C rise to its right, so the shift
+  // takes it back. A wrong sign would crowd the liquid further.
+  Sizes sizes;
+  const double s = 0.01;
+  sizes.radius = 2.5 * s;
+  sizes.mass = 1000.0 * s * s;
+  SphParticles<2> p;
+  for (int a = 0; a < 21; ++a)
+    for (int b = 0; b < 21; ++b) p.add(sizes, Vec<2>(a * s, b * s), Vec<2>::Zero(), 0, 0.0, 1000.0);
+  const int centre = 10 * 21 + 10;
+  FluidConstants fluid;
+  std::vector<Vec<2>> gradient;
+  NeighbourLists nbrs = find_neighbours_cells<2>(p.x, p.radius);
+  compute_density_rate<2>(p, nbrs, fluid, Vec<2>::Zero(), nullptr, 0.0, &gradient);
+  ASSERT_EQ(gradient.size(), std::size_t(p.size()));
+  EXPECT_LT(gradient[centre].norm() * sizes.radius, 1e-12) << "C is not flat inside a lattice";
+  p.x[centre][0] += 0.3 * s;
+  nbrs = find_neighbours_cells<2>(p.x, p.radius);
+  compute_density_rate<2>(p, nbrs, fluid, Vec<2>::Zero(), nullptr, 0.0, &gradient);
+  EXPECT_GT(gradient[centre][0] * sizes.radius, 0.01) << "C should rise towards the crowded side";
+  EXPECT_LT(std::abs(gradient[centre][1]), 1e-9 * std::abs(gradient[centre][0]));
+  const std::vector<double> rate_with = p.drho;
+  compute_density_rate<2>(p, nbrs, fluid, Vec<2>::Zero());
+  EXPECT_EQ(p.drho, rate_with) << "asking for the gradient changed the rate";
+}
+
 TEST(AdaptiveSph, NamesTheParticleWhoseDensityFallsToZero) {
   // Two particles flying apart faster than the step allows: the continuity density of each falls
   // below zero in one step. The run stops there, naming the particle and the step, not at the NaN
