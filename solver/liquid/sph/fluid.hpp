@@ -69,8 +69,8 @@ struct FluidConstants {
   bool free_particles_at_rest = true;
   /// Particle shifting (continuity density only): each step, a particle whose kernel lies inside the
   /// liquid (carried distance to the surface at least its radius) moves by -shifting r_i^2 grad C_i,
-  /// with C_i = sum_j V_j W(x_ij) plus the walls' share: the kernel's partition of unity, 1 wherever the
-  /// particles' volumes tile the space. Its gradient comes from the continuity rate's own pairs, at no
+  /// with C_i = sum_j V_j W(x_ij) plus the walls' share: the kernel's partition of unity, near 1 wherever
+  /// the particles' volumes tile the space. Its gradient comes from the continuity rate's own pairs, at no
   /// measurable cost. Mixed sizes pack denser than their volumes Sum m_i / rho_i say, and the continuity
   /// density does not see it: the adaptive tank stood 3.5% low and went on sinking. C sees it, and the
   /// shift spreads the crowding. Measured on the still 2D tank (sph-hydrostatic), 0 -> 0.02:

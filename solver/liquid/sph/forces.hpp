@@ -71,7 +71,7 @@ void compute_pressure(SphParticles<Dim>& p, const FluidConstants& fluid);
 /// `kick` != 0 the velocities are v + kick a (p.a current): the step's kicked velocities
 /// (FluidConstants::kicked_density_rate). With `concentration`, also writes there, per particle, the
 /// gradient of C_i = sum_j V_j W(x_ij) + the walls' share with the same pair gradients: the kernel's
-/// partition of unity, 1 wherever the particles' volumes tile the space (FluidConstants::shifting).
+/// partition of unity, near 1 wherever the particles' volumes tile the space (FluidConstants::shifting).
 /// OpenMP.
 template <int Dim>
 void compute_density_rate(SphParticles<Dim>& p, const NeighbourLists& nbrs, const FluidConstants& fluid,
