@@ -265,17 +265,14 @@ SphSceneRunner<Dim> SphSceneRunner<Dim>::resume(const std::string& checkpoint, R
   run.next_frame_ = r.scalar_double("run/next_frame");
   const std::vector<std::int64_t> counts = r.int64s("run/counts");
   const std::vector<double> sums = r.doubles("run/sums"), per_level = r.doubles("run/per_level");
-  // Checkpoints written before the compression and the rested count were kept have 6 counts and 3 sums:
-  // those two then count from the resumed step on.
-  LIQUID_VERIFY((counts.size() == 6 || counts.size() == 7) && (sums.size() == 3 || sums.size() == 4) &&
-                    per_level.size() == run.sum_per_level_.size(),
-                "{}: the run's sums have the wrong sizes (levels {} saved, the scene has {})", checkpoint,
-                per_level.size(), run.sum_per_level_.size());
+  LIQUID_VERIFY(counts.size() == 7 && sums.size() == 4 && per_level.size() == run.sum_per_level_.size(),
+                "{}: the run's sums have the wrong sizes ({} counts, {} sums, levels {} saved, the scene has "
+                "{}; a checkpoint from an older version of liquid?)",
+                checkpoint, counts.size(), sums.size(), per_level.size(), run.sum_per_level_.size());
   run.steps_ = counts[0], run.split_ = counts[1], run.merged_ = counts[2], run.emitted_ = counts[3];
   run.min_particles_ = static_cast<int>(counts[4]), run.max_particles_ = static_cast<int>(counts[5]);
   run.sum_particles_ = sums[0], run.sum_single_ = sums[1], run.max_density_error_ = sums[2];
-  if (counts.size() > 6) run.rested_ = counts[6];
-  if (sums.size() > 3) run.max_compression_ = sums[3];
+  run.rested_ = counts[6], run.max_compression_ = sums[3];
   run.sum_per_level_ = per_level;
   if (run.io_->series) {
     std::vector<io::SeriesFrame> frames = detail::get_series(r);

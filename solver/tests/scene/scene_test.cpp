@@ -255,6 +255,10 @@ TEST(SphScene, ResumedRunEndsBitForBitLikeTheUninterruptedOne) {
   EXPECT_EQ(fs.steps, rs.steps);
   EXPECT_EQ(fs.particles, rs.particles);
   EXPECT_EQ(fs.split, rs.split);
+  EXPECT_EQ(fs.max_density_error, rs.max_density_error);
+  EXPECT_EQ(fs.max_compression, rs.max_compression);
+  EXPECT_EQ(fs.rested, rs.rested);
+  EXPECT_GT(fs.max_compression, 0.0);
   EXPECT_EQ(full.n_frames(), resumed.n_frames());
   // A PIC runner refuses the SPH checkpoint and the SPH runner a PIC scene.
   EXPECT_THROW(SceneRunner<2>::resume(half, again), Error);

@@ -328,6 +328,43 @@ TEST(SphForces, ConcentrationGradientPointsIntoACrowding) {
   EXPECT_EQ(p.drho, rate_with) << "asking for the gradient changed the rate";
 }
 
+TEST(AdaptiveSph, ShiftsOnlyDeepParticlesAndRestsTheOnesAlone) {
+  // One step with and without the shift, from rest without gravity: a deep particle pushed towards
+  // its neighbour moves back, one by the surface does not move at all; a particle alone takes rho_0
+  // and is counted; the report's compression is the largest excess density.
+  auto step = [](double shifting, SphStepReport* report) {
+    SphOptions<2> o;
+    o.container = Box<2>{Vec<2>(0, 0), Vec<2>(1, 1)};
+    o.spacing = 0.02;
+    o.adaptive = false;
+    o.gravity = Vec<2>::Zero();
+    o.fluid.shifting = shifting;
+    AdaptiveSph<2> sim(o);
+    sim.seed(levelset::box<2>(Box<2>{Vec<2>(0, 0), Vec<2>(1, 0.5)}));
+    auto& p = sim.particles();
+    int deep = -1, top = -1;
+    for (int i = 0; i < p.size(); ++i) {
+      if ((p.x[i] - Vec<2>(0.51, 0.25)).norm() < 1e-9) deep = i;
+      if ((p.x[i] - Vec<2>(0.51, 0.49)).norm() < 1e-9) top = i;
+    }
+    EXPECT_GE(deep, 0);
+    EXPECT_GE(top, 0);
+    p.x[deep][0] += 0.006, p.x[top][0] += 0.006;
+    const int alone = p.add(sim.sizes(), Vec<2>(0.5, 0.9), Vec<2>::Zero(), 0, 0.0, 700.0);
+    p.density[deep] = 1030.0;
+    *report = sim.advance(1e-5);
+    return std::vector<double>{p.x[deep][0], p.x[top][0], p.density[alone]};
+  };
+  SphStepReport on, off;
+  const std::vector<double> a = step(0.05, &on), b = step(0.0, &off);
+  EXPECT_LT(a[0], b[0] - 1e-7) << "the deep particle was not shifted back from its crowded side";
+  EXPECT_EQ(a[1], b[1]) << "a particle by the surface was shifted";
+  EXPECT_EQ(a[2], 1000.0);
+  EXPECT_EQ(on.rested, 1);
+  EXPECT_NEAR(on.max_compression, 0.03, 1e-9);
+  EXPECT_NEAR(on.max_density_error, 0.03, 1e-9) << "the particle alone still counted as 30% off";
+}
+
 TEST(AdaptiveSph, NamesTheParticleWhoseDensityFallsToZero) {
   // Two particles flying apart faster than the step allows: the continuity density of each falls
   // below zero in one step. The run stops there, naming the particle and the step, not at the NaN
