@@ -44,5 +44,10 @@ struct ProjectionEnergy {
 /// with every cell at its seeded count the shares are equal.
 template <int Dim>
 std::vector<double> particle_volumes(const CellGraph<Dim>& graph, std::span<const Vec<Dim>> x, double volume);
+/// The volume the particles fill by the same count, unscaled: each cell holding particles counts
+/// its volume times min(its particles, 2^Dim) / 2^Dim. A PIC liquid that spreads (its particles
+/// leaving gaps that the cells still count as liquid) grows by this measure.
+template <int Dim>
+double particle_liquid_volume(const CellGraph<Dim>& graph, std::span<const Vec<Dim>> x);
 
 }  // namespace liquid::verification

@@ -261,6 +261,36 @@ Vec<Dim> face_momentum(const CellGraph<Dim>& graph, const FaceValues& faces) {
   return m;
 }
 
+namespace {
+
+/// D_k of APIC: sum over the axis-k stencil of w_f (x_f - x_p)(x_f - x_p)^T.
+template <int Dim>
+Eigen::Matrix<double, Dim, Dim> inertia(const RegularLattice<Dim>& lattice, int k, const Vec<Dim>& xp) {
+  const LinearStencil<Dim> st(lattice, k, xp);
+  Eigen::Matrix<double, Dim, Dim> d = Eigen::Matrix<double, Dim, Dim>::Zero();
+  for (int corner = 0; corner < (1 << Dim); ++corner) {
+    IVec<Dim> a = st.base;
+    for (int j = 0; j < Dim; ++j) a[j] += (corner >> j) & 1;
+    const Vec<Dim> r = lattice.face_position(k, a) - xp;
+    d += st.weight(corner) * r * r.transpose();
+  }
+  return d;
+}
+
+}  // namespace
+
+template <int Dim>
+double particle_affine_energy(const RegularLattice<Dim>& lattice, const Particles<Dim>& particles,
+                              std::span<const double> affine, std::span<const double> masses) {
+  double total = 0.0;
+  for (int p = 0; p < particles.size(); ++p)
+    for (int k = 0; k < Dim; ++k) {
+      const Vec<Dim> c = Eigen::Map<const Vec<Dim>>(affine.data() + (p * Dim + k) * Dim);
+      total += 0.5 * (masses.empty() ? 1.0 : masses[p]) * c.dot(inertia(lattice, k, particles.x[p]) * c);
+    }
+  return total;
+}
+
 template <int Dim>
 Eigen::Vector3d particle_angular_momentum(const RegularLattice<Dim>& lattice, const Particles<Dim>& particles,
                                           std::span<const double> affine, std::span<const double> masses) {
@@ -271,16 +301,8 @@ Eigen::Vector3d particle_angular_momentum(const RegularLattice<Dim>& lattice, co
     Eigen::Vector3d l = lift(xp).cross(lift(particles.v[p]));
     if (!affine.empty())
       for (int k = 0; k < Dim; ++k) {
-        const LinearStencil<Dim> st(lattice, k, xp);
-        Eigen::Matrix<double, Dim, Dim> d = Eigen::Matrix<double, Dim, Dim>::Zero();
-        for (int corner = 0; corner < (1 << Dim); ++corner) {
-          IVec<Dim> a = st.base;
-          for (int j = 0; j < Dim; ++j) a[j] += (corner >> j) & 1;
-          const Vec<Dim> r = lattice.face_position(k, a) - xp;
-          d += st.weight(corner) * r * r.transpose();
-        }
         const Vec<Dim> c = Eigen::Map<const Vec<Dim>>(affine.data() + (p * Dim + k) * Dim);
-        l += lift(Vec<Dim>(d * c)).cross(axis_vector<Dim>(k));
+        l += lift(Vec<Dim>(inertia(lattice, k, xp) * c)).cross(axis_vector<Dim>(k));
       }
     total += m * l;
   }
@@ -310,7 +332,9 @@ Eigen::Vector3d face_angular_momentum(const CellGraph<Dim>& graph, const FaceVal
   template Vec<D> face_momentum<D>(const CellGraph<D>&, const FaceValues&);                                \
   template Eigen::Vector3d particle_angular_momentum<D>(const RegularLattice<D>&, const Particles<D>&,     \
                                                         std::span<const double>, std::span<const double>); \
-  template Eigen::Vector3d face_angular_momentum<D>(const CellGraph<D>&, const FaceValues&);
+  template Eigen::Vector3d face_angular_momentum<D>(const CellGraph<D>&, const FaceValues&);               \
+  template double particle_affine_energy<D>(const RegularLattice<D>&, const Particles<D>&,                 \
+                                            std::span<const double>, std::span<const double>);
 LIQUID_REGULAR(2)
 LIQUID_REGULAR(3)
 #undef LIQUID_REGULAR

@@ -103,6 +103,13 @@ template <int Dim>
 Eigen::Vector3d particle_angular_momentum(const RegularLattice<Dim>& lattice, const Particles<Dim>& particles,
                                           std::span<const double> affine,
                                           std::span<const double> masses = {});
+/// APIC's affine kinetic energy, what the particles' velocities alone leave out: sum_p m_p / 2
+/// sum_k c_k . D_k c_k (c_k row k of the particle's C). Face -> particle fits v + C (x_f - x_p) by
+/// weighted least squares, so |v_p|^2 / 2 plus the particle's share of this never exceeds its
+/// stencil's sum_f w_f u_f^2 / 2, and equals it for a linear field.
+template <int Dim>
+double particle_affine_energy(const RegularLattice<Dim>& lattice, const Particles<Dim>& particles,
+                              std::span<const double> affine, std::span<const double> masses = {});
 /// sum over faces of weight_f x_f x (u_f e_axis).
 template <int Dim>
 Eigen::Vector3d face_angular_momentum(const CellGraph<Dim>& graph, const FaceValues& faces);
