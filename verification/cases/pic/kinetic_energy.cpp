@@ -20,12 +20,12 @@
 // (PIC) to 7% (APIC, adaptive RBF); APIC's liquid, counted the same way, grows by 28% over the run,
 // and its largest rise comes while it grows from 1.16 to 1.26 of the column's volume. So the same regular
 // runs are made again with no reseeding and every particle a fixed mass V / N: a closed mechanical system.
-// Expected (asserted): there PIC's E never rises (its transfers average and interpolate with weights summing
-// to 1, and the uniform projection is orthogonal): every step to 1e-6 E(0). Measured: not once. APIC rises by
-// 0.6%, FLIP by 0.06%, regular RBF by 1.1%: warned and gated. With reseeding, PIC and APIC do not rise above
-// their earlier peak by more than 5e-3 (asserted); every rise over 5e-3 is warned about, and gated. RBF keeps
-// more energy than PIC (the paper's Fig. 10), compared by the total energy E at the end: K at one instant is
-// the phase of the slosh as much as what is kept (full tier, level 7: K at 2 s 0.092 for adaptive RBF against
+// Measured there (level 5; level 6 in the full tier): PIC 0 (no step raised E) and 1.4e-3, APIC 0.6% and
+// 0.2%, FLIP 0.06% and 0.2%, regular RBF 1.1% and 0.4%. So the "PIC and APIC never gain energy" does
+// not hold even there; every figure is warned about and gated. With reseeding, PIC and APIC do not rise
+// above their earlier peak by more than 5e-3 (asserted); every rise over 5e-3 is warned about, and gated.
+// RBF keeps more energy than PIC (the paper's Fig. 10), compared by the total energy E at the end: K at
+// one instant is the phase of the slosh as much as what is kept (full tier, level 7: K at 2 s 0.092 for adaptive RBF against
 // PIC's 0.110, E 0.749 against 0.577). How often the projection itself raised the kinetic energy of the face
 // velocities (PicStepReport::grid_energy_before/after) is reported: an orthogonal projection (the uniform
 // grid's D G) never does (asserted for the uniform runs, to 1e-6). Gated: the energy left at the end, the
@@ -203,19 +203,15 @@ CaseResult run(const CaseOptions& options) {
     fixed.add_row({std::string(m.name), r.steps, r.kinetic.back(), r.total.back(), r.above_peak, r.rise,
                    r.rise_from, r.rise_to, r.volume.back()});
     const std::string key = fmt::format("{} L{} fixed masses", m.name, first);
-    // PIC's transfers average (p -> face) and interpolate (face -> p) with weights that sum to 1, the
-    // uniform projection is orthogonal: no step may raise E beyond round-off and the PPE's tolerance.
-    if (m.transfer == PicTransfer::pic)
-      result.expect(r.rise <= 1e-6, fmt::format("{}: the total energy rose by {:.2e} E(0) from t = {:.3f} to "
-                                                "{:.3f} s",
-                                                key, r.rise, r.rise_from, r.rise_to));
-    else {
-      result.gate.push_back({key + " largest rise of the total energy", GateFigure::Kind::error, r.rise});
-      if (r.rise > 1e-6)
-        result.warnings.push_back(
-            fmt::format("{}: the total energy rose by {:.2e} E(0) from t = {:.2f} to {:.2f} s", key, r.rise,
-                        r.rise_from, r.rise_to));
-    }
+    // PIC's transfers average (p -> face) and interpolate (face -> p) with weights that sum to 1 and
+    // the uniform projection is orthogonal, yet the three together do not bound E (the projection is
+    // orthogonal in the cells' volumes, the transfers weigh by the particles' masses): measured and
+    // gated for every method, not asserted.
+    result.gate.push_back({key + " largest rise of the total energy", GateFigure::Kind::error, r.rise});
+    if (r.rise > 1e-6)
+      result.warnings.push_back(
+          fmt::format("{}: the total energy rose by {:.2e} E(0) from t = {:.2f} to {:.2f} s", key, r.rise,
+                      r.rise_from, r.rise_to));
   }
   const Run &rbf = finest["adaptive-rbf"], &pic = finest["regular-pic"];
   result.expect(rbf.total.back() > pic.total.back(),
