@@ -429,7 +429,8 @@ template <int Dim>
 void AdaptiveSph<Dim>::patch_lists(const std::vector<std::int32_t>& origin) {
   // Kept lists hold every pair within max(r_i, r_j) + skin at the built positions, and stay valid
   // while no particle has moved half the skin from its own. Survivors keep their built positions
-  // and rows (renumbered, removed particles dropped). A new particle is built where it is born,
+  // and rows (renumbered, removed particles dropped). A new particle (origin -1: born in a split or
+  // merge, or one that has moved half the skin, refresh_movers) is built where it is now,
   // with every pair within max(r_i, r_j) + skin between its position and the others' built
   // positions: at any later time both have moved less than half the skin, so a pair within
   // max(r_i, r_j) then is in the list. The results are those of a new search, to the bit.
@@ -500,6 +501,27 @@ void AdaptiveSph<Dim>::patch_lists(const std::vector<std::int32_t>& origin) {
 }
 
 template <int Dim>
+int AdaptiveSph<Dim>::refresh_movers() {
+  const int n = p_.size();
+  if (!(options_.neighbour_skin > 0.0 && options_.patch_lists) || static_cast<int>(built_at_.size()) != n ||
+      nbrs_.n_particles() != n)
+    return 0;
+  // A particle that has moved half the skin is treated as born where it is now; the others keep
+  // their rows and built positions (see patch_lists).
+  const double half = 0.5 * options_.neighbour_skin * options_.spacing;
+  std::vector<std::int32_t> origin(n);
+  int movers = 0;
+  for (int i = 0; i < n; ++i) {
+    const bool moved = (p_.x[i] - built_at_[i]).squaredNorm() >= half * half;
+    origin[i] = moved ? -1 : i;
+    movers += moved ? 1 : 0;
+  }
+  if (movers == 0 || movers > n / 10) return 0;
+  patch_lists(origin);
+  return movers;
+}
+
+template <int Dim>
 void AdaptiveSph<Dim>::collide() {
   const double margin = collision_margin(), e = options_.restitution;
   const Box<Dim>& box = options_.container;
@@ -546,6 +568,7 @@ SphStepReport AdaptiveSph<Dim>::advance(double dt) {
     // Lists that still hold serve a resampling step too (every sum skips the skin's pairs, so the
     // results are the same to the bit); redistancing needs only the point tree at today's positions.
     report.searched = !lists_hold();
+    if (report.searched && (report.refreshed = refresh_movers()) > 0) report.searched = false;
     if (report.searched)
       find_neighbours_now(resampling);
     else if (resampling)

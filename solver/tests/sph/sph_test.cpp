@@ -701,10 +701,12 @@ TEST(SphResample, SplitAndMergeConserveMassAndMomentum3D) {
 
 template <int Dim>
 void skin_changes_nothing() {
-  // A collapsing column, adaptive, 60 steps: lists kept between steps (the skin) against lists found
-  // every step. The state must agree to the bit, and the skin must have saved searches.
-  long changes = 0;  // splits and merges over the runs
-  const auto run = [&changes](double skin, long& searches, bool patch = true) {
+  // A collapsing column, adaptive, 60 steps: lists kept between steps (the skin, with the few
+  // particles that moved half of it refreshed alone) against lists found every step. The state must
+  // agree to the bit, and the skin must have saved searches.
+  long changes = 0;    // splits and merges over the runs
+  long refreshed = 0;  // particles whose lists were found again alone (refresh_movers)
+  const auto run = [&changes, &refreshed](double skin, long& searches, bool patch = true) {
     SphOptions<Dim> o;
     o.patch_lists = patch;
     // The paper's footpoints: the layers on the walls read as surface and split and merge early in
@@ -729,6 +731,7 @@ void skin_changes_nothing() {
     for (int k = 0; k < 60; ++k) {
       const SphStepReport r = sim.advance(0.25 * o.spacing / 20.0);
       searches += r.searched;
+      refreshed += r.refreshed;
       changes += r.resampling.split + r.resampling.merged;
     }
     return sim.state();
@@ -740,7 +743,10 @@ void skin_changes_nothing() {
   EXPECT_EQ(without, 60);
   for (double skin : {0.2, 0.02}) {
     long searched = 0;
+    refreshed = 0;
     const SphState<Dim> a = run(skin, searched);
+    if (skin > 0.1)
+      EXPECT_GT(refreshed, 0) << "no particle's lists were found again alone: refresh_movers went untested";
     ASSERT_EQ(a.particles.size(), b.particles.size()) << "skin " << skin;
     for (int i = 0; i < a.particles.size(); ++i) {
       ASSERT_TRUE(a.particles.x[i] == b.particles.x[i]) << "skin " << skin << ", particle " << i;
