@@ -41,13 +41,16 @@ struct ProjectionEnergy {
 /// fewer (a surface cell, partly liquid). Seeding and reseeding count particles per cell whatever
 /// its level, so on an adaptive tree a particle in a coarse cell stands for more liquid than one in
 /// the band: equal shares would weigh the band 2^Dim times too much per level. On a uniform tree
-/// with every cell at its seeded count the shares are equal.
+/// with every cell at its seeded count the shares are equal. `filled` (optional) receives the
+/// volume the particles fill by the same count, unscaled: each cell holding particles counts its
+/// volume times min(its particles, 2^Dim) / 2^Dim. A PIC liquid that spreads (its particles leaving
+/// gaps that the cells still count as liquid) grows by this measure.
 template <int Dim>
-std::vector<double> particle_volumes(const CellGraph<Dim>& graph, std::span<const Vec<Dim>> x, double volume);
-/// The volume the particles fill by the same count, unscaled: each cell holding particles counts
-/// its volume times min(its particles, 2^Dim) / 2^Dim. A PIC liquid that spreads (its particles
-/// leaving gaps that the cells still count as liquid) grows by this measure.
+std::vector<double> particle_volumes(const CellGraph<Dim>& graph, std::span<const Vec<Dim>> x, double volume,
+                                     double* filled = nullptr);
+/// APIC's affine kinetic energy (particle_affine_energy), each particle weighing w_i; 0 for the
+/// other transfers, whose particles carry no affine part.
 template <int Dim>
-double particle_liquid_volume(const CellGraph<Dim>& graph, std::span<const Vec<Dim>> x);
+double affine_energy(const AdaptivePic<Dim>& sim, std::span<const double> w);
 
 }  // namespace liquid::verification

@@ -568,7 +568,10 @@ SphStepReport AdaptiveSph<Dim>::advance(double dt) {
     // Lists that still hold serve a resampling step too (every sum skips the skin's pairs, so the
     // results are the same to the bit); redistancing needs only the point tree at today's positions.
     report.searched = !lists_hold();
-    if (report.searched && (report.refreshed = refresh_movers()) > 0) report.searched = false;
+    if (report.searched) {
+      report.refreshed = refresh_movers();
+      report.searched = report.refreshed == 0;
+    }
     if (report.searched)
       find_neighbours_now(resampling);
     else if (resampling)

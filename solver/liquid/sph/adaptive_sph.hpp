@@ -119,12 +119,12 @@ struct SphOptions {
   /// pairs found around them) while less than half their skin is used; false, or later, they are
   /// found again by a whole search. Also, when a few particles (at most a tenth) have moved half the
   /// skin and the rest have not, only theirs are found again, around them. Same bits either way.
-  /// Measured on the 3D dam break's first 120 steps (s = a/32, adaptive): the particle shift moves a
-  /// few large particles a fortieth of a spacing a step, which ran the lists out on 64 steps (1
-  /// without the shift); refreshing those particles leaves 23 whole searches (after resamplings that
-  /// found more than half the skin used), neighbours 0.25 -> 0.15 s a step, the step 0.66 -> 0.57 s
-  /// (0.43 s without the shift). Patching after every resampling as well saved no more: a patch
-  /// rewrites every row.
+  /// The particle shift moves a few large particles about a fortieth of a spacing a step, which ran
+  /// the lists out on 64 of the 3D dam break's first 120 steps (s = a/32, adaptive; 1 without the
+  /// shift); refreshing them leaves 23 whole searches (after resamplings that found more than half
+  /// the skin used). Timed by sph-gain-scaling (3D a/80, adaptive): neighbours 0.93 -> 0.45 s a
+  /// step, speed gain 1.77 -> 2.44. Patching after every resampling as well saved no more: a patch
+  /// builds a tree over every built position and rewrites every row.
   bool patch_lists = true;
   /// Where the liquid meets a wall or an obstacle, its boundary is the solid's surface: footpoints
   /// found within a level-0 spacing of a solid are replaced by the point of the solid nearest the

@@ -10,26 +10,26 @@
 // which the flow keeps) by the volume of its cell (particle_volumes: a particle in a coarse cell
 // stands for more liquid than one in the band): kinetic energy K = sum w |v|^2 / 2 (APIC's plus its
 // affine part, particle_affine_energy), potential energy P = sum w g y, their sum E; over time:
-// K / E(0), E / E(0), and the liquid's volume by the same count (particle_liquid_volume); the peak
+// K / E(0), E / E(0), and the liquid's volume by the same count (particle_volumes' `filled`); the peak
 // of K, the time at which K falls to 50% of its peak after it; the growth of E: above its earlier
 // peak, and the largest rise over any earlier value (max over s < t of E(t) - E(s)), with when it
 // happened and the liquid's volume then.
-// "Energy never grows" needs a system whose energy is defined. With reseeding it is not: the
-// reseeding creates particles (1000-5500 in these runs, from 1001 at the start) and a particle's
-// share moves as others enter and leave its cell, so every method's E rises somewhere, by 1.5%
-// (PIC) to 7% (APIC, adaptive RBF); APIC's liquid, counted the same way, grows by 28% over the run,
-// and its largest rise comes while it grows from 1.16 to 1.26 of the column's volume. So the same regular
-// runs are made again with no reseeding and every particle a fixed mass V / N: a closed mechanical system.
-// Measured there (level 5; level 6 in the full tier): PIC 0 (no step raised E) and 1.4e-3, APIC 0.6% and
-// 0.2%, FLIP 0.06% and 0.2%, regular RBF 1.1% and 0.4%. So the "PIC and APIC never gain energy" does
-// not hold even there; every figure is warned about and gated. With reseeding, PIC and APIC do not rise
-// above their earlier peak by more than 5e-3 (asserted); every rise over 5e-3 is warned about, and gated.
-// RBF keeps more energy than PIC (the paper's Fig. 10), compared by the total energy E at the end: K at
-// one instant is the phase of the slosh as much as what is kept (full tier, level 7: K at 2 s 0.092 for adaptive RBF against
-// PIC's 0.110, E 0.749 against 0.577). How often the projection itself raised the kinetic energy of the face
-// velocities (PicStepReport::grid_energy_before/after) is reported: an orthogonal projection (the uniform
-// grid's D G) never does (asserted for the uniform runs, to 1e-6). Gated: the energy left at the end, the
-// peak of K and the largest rise of E per method.
+// "Energy never grows" needs a system whose energy is defined. With reseeding it is not: the reseeding
+// creates particles (1000-5500 in these runs, from 1001 at the start) and a particle's share moves as others
+// enter and leave its cell, so every method's E rises somewhere, by 1.5% (PIC) to 7% (APIC, adaptive RBF);
+// APIC's liquid, counted the same way, grows by 28% over the run, and its largest rise comes while it grows
+// from 1.16 to 1.26 of the column's volume. So the same regular runs are made again with no reseeding and
+// every particle a fixed mass V / N: a closed mechanical system. Measured there (level 5; level 6 in the full
+// tier): PIC 0 (no step raised E) and 1.4e-3, APIC 0.6% and 0.2%, FLIP 0.06% and 0.2%, regular RBF 1.1% and
+// 0.4%. So the "PIC and APIC never gain energy" does not hold even there; every figure is warned
+// about and gated. With reseeding, PIC and APIC do not rise above their earlier peak by more than 5e-3
+// (asserted); every rise over 5e-3 is warned about, and gated. RBF keeps more energy than PIC (the paper's
+// Fig. 10), compared by the total energy E at the end: K at one instant is the phase of the slosh as much as
+// what is kept (full tier, level 7: K at 2 s 0.092 for adaptive RBF against PIC's 0.110, E 0.749 against
+// 0.577). How often the projection itself raised the kinetic energy of the face velocities
+// (PicStepReport::grid_energy_before/after) is reported: an orthogonal projection (the uniform grid's D G)
+// never does (asserted for the uniform runs, to 1e-6). Gated: the energy left at the end, the peak of K and
+// the largest rise of E per method.
 
 #include <cmath>
 
@@ -56,6 +56,7 @@ using Method = FlowMethod;
 
 struct Energies {
   double kinetic = 0.0, potential = 0.0;
+  double filled = 0.0;  ///< the liquid's volume by the particles' count (particle_volumes), over V
   double total() const { return kinetic + potential; }
 };
 
@@ -69,23 +70,21 @@ enum class Shares { cell_shares, fixed_masses };
 template <int Dim>
 Energies energies(const AdaptivePic<Dim>& sim, double volume, Shares shares) {
   const Particles<Dim>& p = sim.particles();
-  const std::vector<double> w = shares == Shares::cell_shares
-                                    ? particle_volumes<Dim>(sim.graph(), p.x, volume)
-                                    : std::vector<double>(p.size(), volume / p.size());
   Energies e;
+  std::vector<double> w = particle_volumes<Dim>(sim.graph(), p.x, volume, &e.filled);
+  e.filled /= volume;
+  if (shares == Shares::fixed_masses) w.assign(w.size(), volume / p.size());
   for (int i = 0; i < p.size(); ++i) {
     e.kinetic += 0.5 * w[i] * p.v[i].squaredNorm();
     e.potential += kGravity * w[i] * p.x[i][1];
   }
-  // APIC's particles carry part of their kinetic energy in the affine matrix C.
-  if (const int c = p.find_field("apic"); c >= 0 && sim.options().transfer == PicTransfer::apic)
-    e.kinetic += particle_affine_energy<Dim>(RegularLattice<Dim>(sim.graph()), p, p.field(c), w);
+  e.kinetic += affine_energy<Dim>(sim, w);
   return e;
 }
 
 struct Run {
   std::vector<double> t, kinetic, total;  ///< relative to E(0)
-  std::vector<double> volume;             ///< particle_liquid_volume relative to the column's
+  std::vector<double> volume;             ///< the liquid's volume by the particles' count, over V
   double peak = 0.0, peak_time = 0.0, half_time = NAN, seconds_per_step = 0.0;
   /// Growth of E: above its earlier peak (E(t) / max E(s<t) - 1), and the largest rise over any
   /// earlier value, max (E(t) - E(s)) / E(0) over s < t, from rise_from to rise_to.
@@ -106,10 +105,11 @@ Run run_method(const Method& m, int level, double end, Shares shares = Shares::c
   AdaptivePic<Dim> sim(o);
   sim.seed(levelset::box<Dim>(column<Dim>()));
   const double volume = column<Dim>().size().prod();
-  const double e0 = energies(sim, volume, shares).total();
-  const auto liquid = [&] { return particle_liquid_volume<Dim>(sim.graph(), sim.particles().x) / volume; };
+  const Energies start = energies(sim, volume, shares);
+  const double e0 = start.total();
   Run run;
-  run.t.push_back(0.0), run.kinetic.push_back(0.0), run.total.push_back(1.0), run.volume.push_back(liquid());
+  run.t.push_back(0.0), run.kinetic.push_back(0.0), run.total.push_back(1.0),
+      run.volume.push_back(start.filled);
   double highest = 1.0, lowest = 1.0, lowest_at = 0.0, lowest_volume = run.volume.back();
   Stopwatch clock;
   while (sim.time() < end - 1e-12) {
@@ -121,7 +121,7 @@ Run run_method(const Method& m, int level, double end, Shares shares = Shares::c
     const double k = e.kinetic / e0, total = e.total() / e0;
     run.reseeded += step.reseed.created;
     run.t.push_back(sim.time()), run.kinetic.push_back(k), run.total.push_back(total);
-    run.volume.push_back(liquid());
+    run.volume.push_back(e.filled);
     run.above_peak = std::max(run.above_peak, total / highest - 1.0);
     if (total - lowest > run.rise) {
       run.rise = total - lowest, run.rise_from = lowest_at, run.rise_to = sim.time();
