@@ -339,10 +339,10 @@ bool AdaptiveSph<Dim>::lists_hold() const {
 }
 
 template <int Dim>
-NeighbourLists AdaptiveSph<Dim>::within_support() const {
+void AdaptiveSph<Dim>::within_support(NeighbourLists& exact) const {
   // Two passes over the rows (count, then fill at the counted offsets), so both run in parallel.
+  // `exact` is a member's storage, kept from one resampling to the next (fresh pages cost more).
   const int n = p_.size();
-  NeighbourLists exact;
   exact.begin.assign(n + 1, 0);
   auto within = [&](int i, int j) {
     const double r = std::max(p_.radius[i], p_.radius[j]);
@@ -362,7 +362,6 @@ NeighbourLists AdaptiveSph<Dim>::within_support() const {
     for (int j : nbrs_.of(i))
       if (within(i, j)) exact.index[static_cast<std::size_t>(at++)] = j;
   }
-  return exact;
 }
 
 template <int Dim>
@@ -382,12 +381,11 @@ SphStepReport AdaptiveSph<Dim>::adapt_now() {
 
 template <int Dim>
 void AdaptiveSph<Dim>::redistance_and_resample(SphStepReport& report) {
-  NeighbourLists skinless;
   if (options_.neighbour_skin > 0.0) {
     auto t = timer_.scope("neighbours");
-    skinless = within_support();
+    within_support(skinless_);
   }
-  const NeighbourLists& exact = options_.neighbour_skin > 0.0 ? skinless : nbrs_;
+  const NeighbourLists& exact = options_.neighbour_skin > 0.0 ? skinless_ : nbrs_;
   {
     auto t = timer_.scope("redistance");
     report.redistancing =
@@ -405,9 +403,9 @@ void AdaptiveSph<Dim>::redistance_and_resample(SphStepReport& report) {
       for (int i = 0; i < n; ++i) p_.elfs[i] += options_.view.distance(p_.x[i]);
     }
   }
-  // Patching pays only when the lists have most of their life left: with more than half the skin
-  // used they would be found again within a step or two anyway.
-  const bool patch = options_.neighbour_skin > 0.0 && options_.patch_lists && skin_used() < 0.5;
+  // Patched lists stay right however much of the skin is used: a survivor that has moved half the
+  // skin is refreshed alone at the next step (refresh_movers), which costs less than a new search.
+  const bool patch = options_.neighbour_skin > 0.0 && options_.patch_lists;
   std::vector<std::int32_t> origin;
   {
     auto t = timer_.scope("resample");
@@ -452,24 +450,30 @@ void AdaptiveSph<Dim>::patch_lists(const std::vector<std::int32_t>& origin) {
   }
   // The new particles' pairs, each found once: from the new particle's side, or from the lower
   // index's when both are new.
-  const PointTree<Dim> tree(built);
+  CellGrid<Dim> grid;
+  grid.build(built, max_reach);
   std::vector<std::vector<std::int32_t>> partners(born.size());
-#pragma omp parallel
-  {
-    std::vector<std::pair<std::uint32_t, double>> hits;
-#pragma omp for schedule(dynamic, 64)
-    for (int b = 0; b < static_cast<int>(born.size()); ++b) {
-      const int k = born[b];
-      tree.within(built[k], max_reach, hits);
-      for (const auto& [j, d2] : hits) {
-        if (static_cast<int>(j) == k || (is_born[j] && static_cast<int>(j) < k)) continue;
-        const double reach = std::max(p_.radius[k], p_.radius[j]) + skin;
-        if ((built[k] - built[j]).squaredNorm() < reach * reach)
-          partners[b].push_back(static_cast<std::int32_t>(j));
-      }
-    }
+#pragma omp parallel for schedule(dynamic, 64)
+  for (int b = 0; b < static_cast<int>(born.size()); ++b) {
+    const int k = born[b];
+    grid.candidates(built[k], [&](int j) {
+      if (j == k || (is_born[j] && j < k)) return;
+      const double reach = std::max(p_.radius[k], p_.radius[j]) + skin;
+      if ((built[k] - built[j]).squaredNorm() < reach * reach) partners[b].push_back(j);
+    });
   }
-  NeighbourLists lists;
+  // The rows are written into the spare lists, whose storage is kept between patches: fresh pages
+  // for every patch cost more than the copy itself. Survivors keep their order (resampling compacts
+  // in place), so a survivor's kept entries stay ascending and only the rows that gained a new
+  // particle's pair need sorting.
+  bool in_order = true;
+  for (int k = 0, last = -1; k < n; ++k) {
+    if (origin[k] < 0) continue;
+    in_order = in_order && origin[k] > last;
+    last = origin[k];
+  }
+  std::vector<char> gained(n, in_order ? 0 : 1);
+  NeighbourLists& lists = spare_;
   lists.begin.assign(n + 1, 0);
 #pragma omp parallel for schedule(static)
   for (int k = 0; k < n; ++k) {
@@ -478,8 +482,10 @@ void AdaptiveSph<Dim>::patch_lists(const std::vector<std::int32_t>& origin) {
       for (int j : nbrs_.of(origin[k])) kept += renumber[j] >= 0 ? 1 : 0;
     lists.begin[k + 1] = kept;
   }
-  for (std::size_t b = 0; b < born.size(); ++b)
-    for (std::int32_t j : partners[b]) ++lists.begin[born[b] + 1], ++lists.begin[j + 1];
+  for (std::size_t b = 0; b < born.size(); ++b) {
+    gained[born[b]] = 1;
+    for (std::int32_t j : partners[b]) ++lists.begin[born[b] + 1], ++lists.begin[j + 1], gained[j] = 1;
+  }
   for (int k = 0; k < n; ++k) lists.begin[k + 1] += lists.begin[k];
   lists.index.resize(static_cast<std::size_t>(lists.begin[n]));
   std::vector<std::int64_t> at(lists.begin.begin(), lists.begin.end() - 1);
@@ -488,15 +494,30 @@ void AdaptiveSph<Dim>::patch_lists(const std::vector<std::int32_t>& origin) {
     if (origin[k] >= 0)
       for (int j : nbrs_.of(origin[k]))
         if (renumber[j] >= 0) lists.index[static_cast<std::size_t>(at[k]++)] = renumber[j];
+  const std::vector<std::int64_t> kept_end = at;
   for (std::size_t b = 0; b < born.size(); ++b)
     for (std::int32_t j : partners[b]) {
       lists.index[static_cast<std::size_t>(at[born[b]]++)] = j;
       lists.index[static_cast<std::size_t>(at[j]++)] = born[b];
     }
-#pragma omp parallel for schedule(static)
-  for (int k = 0; k < n; ++k)
-    std::sort(lists.index.begin() + lists.begin[k], lists.index.begin() + lists.begin[k + 1]);
-  nbrs_ = std::move(lists);
+    // A survivor's gained pairs come after its kept ones, in ascending order (the new particles are
+    // visited in it): each is moved down into place. A new particle's row is sorted whole.
+#pragma omp parallel for schedule(dynamic, 1024)
+  for (int k = 0; k < n; ++k) {
+    if (!gained[k]) continue;
+    const auto first = lists.index.begin() + lists.begin[k], last = lists.index.begin() + lists.begin[k + 1];
+    if (is_born[k] || !in_order) {
+      std::sort(first, last);
+      continue;
+    }
+    for (auto it = lists.index.begin() + kept_end[k]; it != last; ++it) {
+      const std::int32_t j = *it;
+      auto hole = it;
+      for (; hole != first && *(hole - 1) > j; --hole) *hole = *(hole - 1);
+      *hole = j;
+    }
+  }
+  std::swap(nbrs_, spare_);
   built_at_ = std::move(built);
 }
 

@@ -239,7 +239,7 @@ class AdaptiveSph {
   /// True when nbrs_ still holds every pair within reach: the same particles, none moved half the skin.
   bool lists_hold() const;
   /// nbrs_ without the skin's pairs (what redistancing, elfs and resampling read).
-  NeighbourLists within_support() const;
+  void within_support(NeighbourLists& exact) const;
   /// After splits and merges (`origin`: each particle's index before them, -1 if new), keeps the
   /// lists instead of searching again: survivors keep their rows and built positions, and the new
   /// particles' pairs are found around them.
@@ -271,6 +271,8 @@ class AdaptiveSph {
   PointTree<Dim> tree_;
   NeighbourLists nbrs_;             ///< the pairs within max(r_i, r_j) + skin at built_at_
   std::vector<Vec<Dim>> built_at_;  ///< the positions nbrs_ were found at (empty: none current)
+  NeighbourLists spare_;            ///< patch_lists' output storage, kept between patches
+  NeighbourLists skinless_;         ///< within_support's output, kept between resamplings
   PhaseTimer timer_;
   std::mt19937_64 rng_;
   double time_ = 0.0;

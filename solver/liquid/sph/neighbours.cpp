@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cmath>
 #include <limits>
 
 #include <nanoflann.hpp>
@@ -160,6 +161,38 @@ const char* to_string(NeighbourSearch search) {
 }
 
 template <int Dim>
+void CellGrid<Dim>::build(std::span<const Vec<Dim>> points, double width) {
+  LIQUID_VERIFY(width > 0.0 && std::isfinite(width), "CellGrid: the cells' width must be positive, not {}",
+                width);
+  const int n = static_cast<int>(points.size());
+  width_ = width;
+  Vec<Dim> hi = Vec<Dim>::Zero();
+  lo_ = hi;
+  if (n > 0) lo_ = hi = points[0];
+  for (int i = 0; i < n; ++i) {
+    LIQUID_VERIFY(points[i].allFinite(), "CellGrid: point {} has a position that is not finite", i);
+    lo_ = lo_.cwiseMin(points[i]), hi = hi.cwiseMax(points[i]);
+  }
+  double cells = 1.0;
+  for (int d = 0; d < Dim; ++d) cells *= std::floor((hi[d] - lo_[d]) / width) + 1.0;
+  LIQUID_VERIFY(cells < 2147483647.0, "CellGrid: {:.3g} cells {} wide: the points spread too far", cells,
+                width);
+  for (int d = 0; d < Dim; ++d) dims_[d] = static_cast<std::int64_t>((hi[d] - lo_[d]) / width) + 1;
+  // Counting sort of the points by cell (a point on the far edge rounds into the last cell).
+  std::vector<std::int64_t> cell_of(n);
+  cell_begin_.assign(static_cast<std::size_t>(dims_.prod()) + 1, 0);
+  for (int i = 0; i < n; ++i) {
+    Cell c = cell(points[i]);
+    for (int d = 0; d < Dim; ++d) c[d] = std::clamp<std::int64_t>(c[d], 0, dims_[d] - 1);
+    ++cell_begin_[static_cast<std::size_t>(cell_of[i] = flat(c)) + 1];
+  }
+  for (std::size_t c = 1; c < cell_begin_.size(); ++c) cell_begin_[c] += cell_begin_[c - 1];
+  order_.resize(n);
+  std::vector<std::int32_t> next(cell_begin_.begin(), cell_begin_.end() - 1);
+  for (int i = 0; i < n; ++i) order_[next[cell_of[i]]++] = i;
+}
+
+template <int Dim>
 NeighbourLists find_neighbours_cells(std::span<const Vec<Dim>> x, std::span<const double> radius) {
   const int n = static_cast<int>(x.size());
   LIQUID_VERIFY(static_cast<int>(radius.size()) == n, "find_neighbours_cells: {} particles, {} radii", n,
@@ -167,58 +200,17 @@ NeighbourLists find_neighbours_cells(std::span<const Vec<Dim>> x, std::span<cons
   NeighbourLists lists;
   lists.begin.assign(n + 1, 0);
   if (n == 0) return lists;
-  Vec<Dim> lo = x[0], hi = x[0];
-  double rmax = 0.0;
-  for (int i = 0; i < n; ++i) {
-    LIQUID_VERIFY(x[i].allFinite(), "find_neighbours_cells: particle {} has a position that is not finite",
-                  i);
-    lo = lo.cwiseMin(x[i]), hi = hi.cwiseMax(x[i]), rmax = std::max(rmax, radius[i]);
-  }
+  const double rmax = *std::max_element(radius.begin(), radius.end());
   LIQUID_VERIFY(rmax > 0.0, "find_neighbours_cells: every radius is zero");
-  Eigen::Matrix<std::int64_t, Dim, 1> dims;
-  for (int d = 0; d < Dim; ++d) dims[d] = static_cast<std::int64_t>((hi[d] - lo[d]) / rmax) + 1;
-  const std::int64_t n_cells = dims.prod();
-  LIQUID_VERIFY(n_cells < (std::int64_t(1) << 31),
-                "find_neighbours_cells: {} cells: the particles spread too far", n_cells);
-  auto coord = [&](const Vec<Dim>& p) {
-    Eigen::Matrix<std::int64_t, Dim, 1> c;
-    for (int d = 0; d < Dim; ++d)
-      c[d] = std::min<std::int64_t>(dims[d] - 1, static_cast<std::int64_t>((p[d] - lo[d]) / rmax));
-    return c;
-  };
-  auto flat = [&](const Eigen::Matrix<std::int64_t, Dim, 1>& c) {
-    std::int64_t f = 0;
-    for (int d = Dim - 1; d >= 0; --d) f = f * dims[d] + c[d];
-    return f;
-  };
-  // Counting sort of the particles by cell.
-  std::vector<std::int32_t> cell_begin(n_cells + 1, 0), order(n);
-  std::vector<std::int64_t> cell_of(n);
-  for (int i = 0; i < n; ++i) ++cell_begin[(cell_of[i] = flat(coord(x[i]))) + 1];
-  for (std::int64_t c = 0; c < n_cells; ++c) cell_begin[c + 1] += cell_begin[c];
-  {
-    std::vector<std::int32_t> next(cell_begin.begin(), cell_begin.end() - 1);
-    for (int i = 0; i < n; ++i) order[next[cell_of[i]]++] = i;
-  }
+  CellGrid<Dim> grid;
+  grid.build(x, rmax);
   // Visits every j != i with |x_i - x_j| < max(r_i, r_j).
   auto visit = [&](int i, auto&& f) {
-    const auto c = coord(x[i]);
-    Eigen::Matrix<std::int64_t, Dim, 1> o = Eigen::Matrix<std::int64_t, Dim, 1>::Constant(-1);
-    while (true) {
-      const Eigen::Matrix<std::int64_t, Dim, 1> q = c + o;
-      if ((q.array() >= 0).all() && (q.array() < dims.array()).all()) {
-        const std::int64_t cell = flat(q);
-        for (std::int32_t k = cell_begin[cell]; k < cell_begin[cell + 1]; ++k) {
-          const int j = order[k];
-          if (j == i) continue;
-          const double r = std::max(radius[i], radius[j]);
-          if ((x[i] - x[j]).squaredNorm() < r * r) f(j);
-        }
-      }
-      int d = 0;
-      while (d < Dim && ++o[d] > 1) o[d] = -1, ++d;
-      if (d == Dim) break;
-    }
+    grid.candidates(x[i], [&](int j) {
+      if (j == i) return;
+      const double r = std::max(radius[i], radius[j]);
+      if ((x[i] - x[j]).squaredNorm() < r * r) f(j);
+    });
   };
 #pragma omp parallel for schedule(dynamic, 256)
   for (int i = 0; i < n; ++i) {
@@ -239,6 +231,8 @@ NeighbourLists find_neighbours_cells(std::span<const Vec<Dim>> x, std::span<cons
 
 template NeighbourLists find_neighbours_cells<2>(std::span<const Vec<2>>, std::span<const double>);
 template NeighbourLists find_neighbours_cells<3>(std::span<const Vec<3>>, std::span<const double>);
+template class CellGrid<2>;
+template class CellGrid<3>;
 template class PointTree<2>;
 template class PointTree<3>;
 template NeighbourLists find_neighbours<2>(const PointTree<2>&, std::span<const Vec<2>>,

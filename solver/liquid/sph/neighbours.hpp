@@ -4,6 +4,8 @@
 // relation, found with a k-d tree (nanoflann) or a cell list. PointTree also answers the radius and
 // nearest-point queries of the surface and the feature-size estimate.
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <memory>
 #include <span>
@@ -38,6 +40,63 @@ class PointTree {
  private:
   struct Impl;
   std::unique_ptr<Impl> impl_;
+};
+
+/// Points binned into a uniform grid of cells `width` wide (a counting sort by cell, no tree): every
+/// point within `width` of x lies in the 3^Dim cells around x's own, which `candidates` visits. The
+/// points are referred to, not copied: they must outlive the grid and not move while it is used.
+template <int Dim>
+class CellGrid {
+ public:
+  using Cell = Eigen::Matrix<std::int64_t, Dim, 1>;
+
+  /// Bins `points` (all finite; `width` > 0). Throws when the grid would need 2^31 cells or more.
+  void build(std::span<const Vec<Dim>> points, double width);
+  double width() const { return width_; }
+
+  /// Calls f(j) for every point j in the 3^Dim cells around x (x anywhere; cells outside the grid
+  /// are skipped), j itself included when x is a point's position: the caller filters by distance.
+  template <class F>
+  void candidates(const Vec<Dim>& x, F&& f) const {
+    const Cell c = cell(x);
+    Cell o = Cell::Constant(-1);
+    while (true) {
+      const Cell q = c + o;
+      if ((q.array() >= 0).all() && (q.array() < dims_.array()).all()) {
+        const std::int64_t at = flat(q);
+        for (std::int32_t k = cell_begin_[at]; k < cell_begin_[at + 1]; ++k) f(order_[k]);
+      }
+      int d = 0;
+      while (d < Dim && ++o[d] > 1) o[d] = -1, ++d;
+      if (d == Dim) break;
+    }
+  }
+
+ private:
+  Cell cell(const Vec<Dim>& x) const {
+    Cell c;
+    for (int d = 0; d < Dim; ++d) {
+      // Far outside (or not a number): a cell two away from the grid, whose neighbours are all outside.
+      const double t = std::floor((x[d] - lo_[d]) / width_);
+      if (!(t >= -1.0))
+        c[d] = -2;
+      else if (t > static_cast<double>(dims_[d]))
+        c[d] = dims_[d] + 1;
+      else
+        c[d] = static_cast<std::int64_t>(t);
+    }
+    return c;
+  }
+  std::int64_t flat(const Cell& c) const {
+    std::int64_t f = 0;
+    for (int d = Dim - 1; d >= 0; --d) f = f * dims_[d] + c[d];
+    return f;
+  }
+
+  Vec<Dim> lo_ = Vec<Dim>::Zero();
+  double width_ = 1.0;
+  Cell dims_ = Cell::Zero();
+  std::vector<std::int32_t> cell_begin_{0}, order_;
 };
 
 /// Symmetric neighbour lists in compressed rows: the neighbours of i (never i itself) are

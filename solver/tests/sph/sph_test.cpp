@@ -235,6 +235,42 @@ TEST(SphNeighbours, TreeAndCellListMatchBruteForceWithMixedRadii3D) {
 }
 
 template <int Dim>
+void cell_grid_offers_everything_within_its_width() {
+  // Points in the unit box; queries inside, on the edges and outside it (the grid spans only the
+  // points). Every point within the width must be offered, once; points far away must not be.
+  std::mt19937_64 rng(23);
+  std::uniform_real_distribution<double> u(0.0, 1.0), q(-0.3, 1.3);
+  std::vector<Vec<Dim>> points(500);
+  for (Vec<Dim>& x : points)
+    for (int d = 0; d < Dim; ++d) x[d] = u(rng);
+  const double width = 0.13;
+  CellGrid<Dim> grid;
+  grid.build(points, width);
+  for (int k = 0; k < 400; ++k) {
+    Vec<Dim> x;
+    for (int d = 0; d < Dim; ++d) x[d] = k < 10 ? (k % 2 == 0 ? 0.0 : 1.0) : q(rng);
+    std::vector<int> offered(points.size(), 0);
+    grid.candidates(x, [&](int j) { ++offered[j]; });
+    for (std::size_t j = 0; j < points.size(); ++j) {
+      const double distance = (points[j] - x).norm();
+      ASSERT_LE(offered[j], 1) << "point " << j << " offered twice for query " << k;
+      if (distance < width) ASSERT_EQ(offered[j], 1) << "point " << j << " within the width was missed";
+      if (distance > 2.0 * std::sqrt(double(Dim)) * width)
+        ASSERT_EQ(offered[j], 0) << "point " << j << " is " << distance / width << " widths away";
+    }
+  }
+  EXPECT_THROW(grid.build(points, 0.0), Error);
+  std::vector<Vec<Dim>> spread = {Vec<Dim>::Zero(), Vec<Dim>::Constant(1e6)};
+  EXPECT_THROW(grid.build(spread, 1e-4), Error) << "a grid of 1e10 cells or more should be refused";
+}
+TEST(SphNeighbours, CellGridOffersEverythingWithinItsWidth2D) {
+  cell_grid_offers_everything_within_its_width<2>();
+}
+TEST(SphNeighbours, CellGridOffersEverythingWithinItsWidth3D) {
+  cell_grid_offers_everything_within_its_width<3>();
+}
+
+template <int Dim>
 void forces_are_symmetric(bool mean_radius_gradient) {
   Sizes sizes;
   sizes.radius = 0.15;
