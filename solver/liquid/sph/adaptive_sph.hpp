@@ -116,15 +116,15 @@ struct SphOptions {
   /// same to the bit as with lists found every step (skin 0).
   double neighbour_skin = 0.2;
   /// After a resampling that split or merged: true, the kept lists are patched (the new particles'
-  /// pairs found around them) while less than half their skin is used; false, or later, they are
-  /// found again by a whole search. Also, when a few particles (at most a tenth) have moved half the
-  /// skin and the rest have not, only theirs are found again, around them. Same bits either way.
-  /// The particle shift moves a few large particles about a fortieth of a spacing a step, which ran
-  /// the lists out on 64 of the 3D dam break's first 120 steps (s = a/32, adaptive; 1 without the
-  /// shift); refreshing them leaves 23 whole searches (after resamplings that found more than half
-  /// the skin used). Timed by sph-gain-scaling (3D a/80, adaptive): neighbours 0.93 -> 0.45 s a
-  /// step, speed gain 1.77 -> 2.44. Patching after every resampling as well saved no more: a patch
-  /// builds a tree over every built position and rewrites every row.
+  /// pairs found around them, in a grid of the built positions); false, they are found again by a
+  /// whole search. Also, when a few particles (at most a tenth) have moved half the skin and the
+  /// rest have not, only theirs are found again, around them. Same bits either way. The particle
+  /// shift moves a few large particles about a fortieth of a spacing a step, which ran the lists
+  /// out on 64 of the 3D dam break's first 120 steps (s = a/32, adaptive; 1 without the shift).
+  /// Timed by sph-gain-scaling (3D a/80, adaptive): neighbours 0.93 s a step with whole searches,
+  /// 0.45 with the movers refreshed by a patch that built a k-d tree and wrote its rows into fresh
+  /// storage, 0.18 with a grid, kept storage and every resampling patched (speed gain 1.77 -> 2.44
+  /// -> 2.93).
   bool patch_lists = true;
   /// Where the liquid meets a wall or an obstacle, its boundary is the solid's surface: footpoints
   /// found within a level-0 spacing of a solid are replaced by the point of the solid nearest the
