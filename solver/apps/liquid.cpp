@@ -83,6 +83,10 @@ void echo(const Scene<Dim>& s, const RunSettings& settings, bool resumed) {
              o.surface == PicSurface::air_cells
                  ? std::string("p = 0 at the air cells' centres")
                  : fmt::format("p = 0 at the particles' level set (radius {} h)", o.surface_radius));
+  if (o.projection == PicProjection::mass)
+    fmt::print(
+        "  projection  orthogonal in the faces' transferred masses (lightest face {} of a full cell's)\n",
+        o.min_face_mass);
   const bool amg = o.solver.kind == linalg::SolverKind::bicgstab_amg ||
                    o.solver.kind == linalg::SolverKind::gmres_amg ||
                    o.solver.kind == linalg::SolverKind::cg_amg;

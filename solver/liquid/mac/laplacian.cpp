@@ -25,7 +25,7 @@ bool regular_neighbourhood(const CellGraph<Dim>& graph, CellId c) {
 
 template <int Dim>
 RowKind fd_row(const CellGraph<Dim>& graph, const DofLayout<Dim>& layout, const Boundary<Dim>& boundary,
-               CellId c, Row& row) {
+               CellId c, Row& row, std::span<const double> coefficient) {
   const int i = layout.dof_of_cell[c];
   const Vec<Dim> x = graph.centre(c);
   const Vec<Dim> h = graph.cell_size(c);
@@ -35,12 +35,16 @@ RowKind fd_row(const CellGraph<Dim>& graph, const DofLayout<Dim>& layout, const 
     double d[2];
     int dof[2];
     double val[2];
+    double beta[2] = {1.0, 1.0};
     for (int s = 0; s < 2; ++s) {
       const int dir = s == 0 ? -1 : 1;
       d[s] = h[k];
       dof[s] = i;
       val[s] = 0.0;
       graph.for_each_side_face(c, k, dir, [&](const SideFace& sf) {
+        // A Neumann wall's flux is given (beta dp/dn); every other side's weight takes its face's beta.
+        if (!coefficient.empty() && (sf.adjacency != Adjacency::boundary || boundary.dirichlet_walls))
+          beta[s] = coefficient[sf.face];
         if (sf.adjacency == Adjacency::boundary) {
           Vec<Dim> w = x;
           w[k] = dir < 0 ? graph.domain().lo[k] : graph.domain().hi[k];
@@ -84,7 +88,7 @@ RowKind fd_row(const CellGraph<Dim>& graph, const DofLayout<Dim>& layout, const 
     }
     const double scale = 2.0 / (d[0] + d[1]);
     for (int s = 0; s < 2; ++s) {
-      const double w = scale / d[s];
+      const double w = beta[s] * scale / d[s];
       diag += w;
       if (dof[s] >= 0) row.entries.emplace_back(dof[s], -w);
       row.rhs += w * val[s];
@@ -125,8 +129,10 @@ RowKind rbf_row(const CellGraph<Dim>& graph, const DofLayout<Dim>& layout, const
 
 template bool regular_neighbourhood<2>(const CellGraph<2>&, CellId);
 template bool regular_neighbourhood<3>(const CellGraph<3>&, CellId);
-template RowKind fd_row<2>(const CellGraph<2>&, const DofLayout<2>&, const Boundary<2>&, CellId, Row&);
-template RowKind fd_row<3>(const CellGraph<3>&, const DofLayout<3>&, const Boundary<3>&, CellId, Row&);
+template RowKind fd_row<2>(const CellGraph<2>&, const DofLayout<2>&, const Boundary<2>&, CellId, Row&,
+                           std::span<const double>);
+template RowKind fd_row<3>(const CellGraph<3>&, const DofLayout<3>&, const Boundary<3>&, CellId, Row&,
+                           std::span<const double>);
 template RowKind rbf_row<2>(const CellGraph<2>&, const DofLayout<2>&, const Boundary<2>&, CellId,
                             const PoissonOptions&, rbf::WeightCache<2>*, RowScratch<2>&, Row&, rbf::Status&);
 template RowKind rbf_row<3>(const CellGraph<3>&, const DofLayout<3>&, const Boundary<3>&, CellId,

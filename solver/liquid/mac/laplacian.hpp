@@ -4,6 +4,7 @@
 // at interface cuts, mirror ghosts at Neumann walls), and RBF-FD (PHS + polynomials) on nearby
 // cell centres otherwise. One row at a time, over plain data; the driver (assemble_poisson) loops.
 
+#include <span>
 #include <utility>
 #include <vector>
 
@@ -62,10 +63,12 @@ template <int Dim>
 bool regular_neighbourhood(const CellGraph<Dim>& graph, CellId c);
 
 /// Adds the FD row of -Lap p at the regular cell c to `row` (whose rhs already holds -f); a centre
-/// on the interface becomes p_c = value. Returns RowKind::fd or RowKind::on_interface.
+/// on the interface becomes p_c = value. Returns RowKind::fd or RowKind::on_interface. With
+/// `coefficient` (per face id) the row is -div(beta grad p): each side's weight times its face's
+/// beta, except at a Neumann wall, whose flux (beta dp/dn) is given.
 template <int Dim>
 RowKind fd_row(const CellGraph<Dim>& graph, const DofLayout<Dim>& layout, const Boundary<Dim>& boundary,
-               CellId c, Row& row);
+               CellId c, Row& row, std::span<const double> coefficient = {});
 
 /// Adds the RBF-FD row of -Lap p at cell c to `row`; a centre within 1e-3 cell sizes of the
 /// interface takes the interface value (RowKind::on_interface). `status` receives the weights'

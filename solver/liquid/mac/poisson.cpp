@@ -58,8 +58,17 @@ std::vector<Row> laplacian_rows(const CellGraph<Dim>& graph, const PoissonSystem
         }
         AssemblyStats& s = local.stats;
         if (options.regular_fd && regular_neighbourhood(graph, c)) {
-          ++(fd_row(graph, sys.layout, sys.boundary, c, row) == RowKind::fd ? s.n_fd_rows : s.n_on_interface);
+          ++(fd_row(graph, sys.layout, sys.boundary, c, row, problem.face_coefficient) == RowKind::fd
+                 ? s.n_fd_rows
+                 : s.n_on_interface);
           return;
+        }
+        if (!problem.face_coefficient.empty()) {
+          const Vec<Dim> x = graph.centre(c);
+          throw Error(fmt::format(
+              "cell {} at ({:.6g}) needs an RBF-FD row, which takes no face coefficients (a variable-density "
+              "PPE needs a uniform tree and regular_fd)",
+              c, fmt::join(x.data(), x.data() + Dim, ", ")));
         }
         rbf::Status st;
         if (rbf_row(graph, sys.layout, sys.boundary, c, options, cache, local.scratch, row, st) ==
@@ -145,6 +154,15 @@ PoissonSystem<Dim> assemble_poisson(const CellGraph<Dim>& graph, const PoissonPr
                 "air cells need their Dirichlet value function");
   LIQUID_VERIFY(!problem.boundary.dirichlet_walls || problem.boundary.dirichlet,
                 "Dirichlet walls need their value function");
+  LIQUID_VERIFY(problem.face_coefficient.empty() ||
+                    static_cast<int>(problem.face_coefficient.size()) >= graph.face_capacity(),
+                "Poisson problem: {} face coefficients for {} face ids", problem.face_coefficient.size(),
+                graph.face_capacity());
+  if (!problem.face_coefficient.empty())
+    for (FaceId f : graph.face_ids())
+      LIQUID_VERIFY(problem.face_coefficient[f] > 0.0 && std::isfinite(problem.face_coefficient[f]),
+                    "Poisson problem: face {} has coefficient {} (must be positive and finite)", f,
+                    problem.face_coefficient[f]);
   Stopwatch watch;
   PoissonSystem<Dim> sys;
   sys.boundary = problem.boundary;

@@ -29,6 +29,11 @@ struct PoissonProblem {
   std::vector<double> f_cells;  ///< per cell id: f at the cell (used instead of f when not empty)
   Boundary<Dim> boundary;       ///< interface, walls and their values
   std::function<double(const Vec<Dim>&)> pin_value;  ///< p at the pinned centre (Nullspace::pin)
+  /// Per face id, positive: beta in -div(beta grad p) = -f, a face's flux scaled by its beta (a
+  /// variable-density PPE: beta = 1 / density). Empty: beta = 1. FD rows only: a problem with
+  /// coefficients on a tree that needs an RBF-FD row is refused, naming the cell. The walls' flux
+  /// (Boundary::wall_flux) is beta dp/dn there, not scaled.
+  std::vector<double> face_coefficient;
 };
 
 struct AssemblyStats {

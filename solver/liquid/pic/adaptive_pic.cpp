@@ -39,6 +39,16 @@ const char* to_string(PicSurface surface) {
   return surface == PicSurface::air_cells ? "air" : "levelset";
 }
 
+const char* to_string(PicProjection projection) {
+  return projection == PicProjection::volume ? "volume" : "mass";
+}
+
+PicProjection parse_pic_projection(const std::string& name) {
+  if (name == "volume") return PicProjection::volume;
+  if (name == "mass") return PicProjection::mass;
+  throw Error(fmt::format("unknown projection '{}' (choices: volume, mass)", name));
+}
+
 PicSurface parse_pic_surface(const std::string& name) {
   if (name == "air") return PicSurface::air_cells;
   if (name == "levelset") return PicSurface::levelset;
@@ -71,6 +81,10 @@ CellGraph<Dim> initial_graph(const PicOptions<Dim>& o) {
   LIQUID_VERIFY(o.flip >= 0.0 && o.flip <= 1.0, "PIC: FLIP blend {} is outside [0, 1]", o.flip);
   LIQUID_VERIFY(o.surface_radius > 0.0 && o.surface_radius < 2.0,
                 "PIC: surface radius {} (finest cells) is outside (0, 2)", o.surface_radius);
+  LIQUID_VERIFY(o.projection == PicProjection::volume || o.transfer != PicTransfer::rbf,
+                "PIC: the mass projection needs a regular transfer (pic, flip or apic) on a uniform tree");
+  LIQUID_VERIFY(o.min_face_mass > 0.0 && o.min_face_mass <= 1.0, "PIC: min_face_mass {} is outside (0, 1]",
+                o.min_face_mass);
   return tree::uniform<Dim>(o.domain, o.adaptive ? o.coarse_level : o.fine_level, graph_options(o));
 }
 
@@ -364,6 +378,14 @@ void AdaptivePic<Dim>::to_faces(PicStepReport& r) {
   else
     r.p2g = particles_to_faces<Dim>(graph_, particles_, bins_, options_.rbf, faces);
   r.unknown_faces = r.p2g.empty;
+  if (options_.projection == PicProjection::mass) {
+    // The transfer's masses are unit particle masses times weights: a full cell's seeded particles
+    // (2^Dim) weigh 2^Dim on each of its faces.
+    const double full = static_cast<double>(1 << Dim);
+    face_beta_.assign(faces.weight.size(), 1.0);
+    for (std::size_t f = 0; f < faces.weight.size(); ++f)
+      face_beta_[f] = full / std::max(faces.weight[f], options_.min_face_mass * full);
+  }
   u_ = std::move(faces.value);
   known_ = std::move(faces.known);
   extrapolate_faces<Dim>(graph_, options_.extrapolation_layers, u_, known_);
@@ -468,6 +490,7 @@ void AdaptivePic<Dim>::assemble(double dt) {
       if (graph_.face(f).boundary == side) return n[axis] * u_[f] / dt;
     return 0.0;
   };
+  if (options_.projection == PicProjection::mass) problem.face_coefficient = face_beta_;
   system_ = mac::assemble_poisson<Dim>(graph_, problem, options_.poisson);
   if (!solid_.empty()) fold_solid_rows();
 }
@@ -586,7 +609,7 @@ void AdaptivePic<Dim>::project(double dt) {
     // unknown, whose gradient mac or interface_gradients() gave.
     const bool wet = surface_ ? std::isfinite(dn[f]) : cls_.wet(g);
     known_[f] = wet;
-    if (wet) u_[f] -= dt * dn[f];
+    if (wet) u_[f] -= dt * (face_beta_.empty() ? 1.0 : face_beta_[f]) * dn[f];
   });
   check_faces("project");
 }
@@ -598,7 +621,9 @@ double AdaptivePic<Dim>::grid_energy() const {
     const GraphFace& g = graph_.face(f);
     if (g.is_boundary() || !cls_.wet(g)) return;
     const double d = std::abs(graph_.centre(g.cell[1])[g.axis] - graph_.centre(g.cell[0])[g.axis]);
-    sum += u_[f] * u_[f] * graph_.face_area(f) * d;
+    // The mass projection's norm: each face's volume times its mass over a full cell's (1 / beta).
+    const double weight = face_beta_.empty() ? 1.0 : 1.0 / face_beta_[f];
+    sum += weight * u_[f] * u_[f] * graph_.face_area(f) * d;
   });
   return 0.5 * sum;
 }

@@ -52,6 +52,17 @@ enum class PicSurface { air_cells, levelset };
 const char* to_string(PicSurface surface);
 /// "air", "levelset"; throws naming the choices.
 PicSurface parse_pic_surface(const std::string& name);
+
+/// The inner product the pressure projection is orthogonal in (regular transfers, uniform tree):
+/// volume, every face weighing its volume (the standard PPE); or mass, every face weighing the mass
+/// the particle -> face transfer gave it, so that the projection never raises the faces' kinetic
+/// energy as the transfers count it. The PPE then is -div(beta grad p) = -div u* / dt with
+/// beta_f = m_full / max(m_f, min_face_mass m_full), m_full the mass of a cell's seeded
+/// particles, and the projection u -= dt beta grad p.
+enum class PicProjection { volume, mass };
+const char* to_string(PicProjection projection);
+/// "volume", "mass"; throws naming the choices.
+PicProjection parse_pic_projection(const std::string& name);
 /// "rbf", "pic", "flip", "apic"; throws naming the choices.
 PicTransfer parse_pic_transfer(const std::string& name);
 
@@ -100,6 +111,10 @@ struct PicOptions {
   /// 0.029; 1.0 -> 0.0156 (the air cells' error), 0.015; 1.25 -> 0.025, 0.0055. The air cells:
   /// 0.0156 gH and 3e-11 m/s. A smaller r makes the surface bumpier, a larger one moves it out.
   double surface_radius = 0.75;
+  PicProjection projection = PicProjection::volume;
+  /// projection = mass: the lightest a face is taken to be, as a fraction of a full cell's mass
+  /// (faces near the surface, where few particles reach, would otherwise take unbounded beta).
+  double min_face_mass = 0.1;
 
   /// The paper's operator settings for the PIC step: PHS r^3 with degree 2 for the Laplacian rows
   /// and the face gradients (mac's default of degree 3 is for the convergence studies; see
@@ -143,8 +158,10 @@ struct PicStepReport {
   long unknown_faces = 0;  ///< faces no particle reached, before extrapolation
   /// Kinetic energy of the face velocities over the wet faces, 1/2 sum of u_f^2 A_f d_f (d_f the
   /// distance between the two cell centres along the axis; density 1), before the projection (after
-  /// the forces) and after it. An orthogonal projection never raises it; the RBF-FD rows on a tree
-  /// are not D G, so `after > before` is possible there and is worth watching.
+  /// the forces) and after it; with the mass projection each face also weighs its transferred mass
+  /// over a full cell's (1 / beta), the norm that projection is orthogonal in. An orthogonal
+  /// projection never raises it; the RBF-FD rows on a tree are not D G, so `after > before` is
+  /// possible there and is worth watching.
   double grid_energy_before = 0.0, grid_energy_after = 0.0;
   AdvectReport advect;
   ReseedReport reseed;
@@ -239,6 +256,7 @@ class AdaptivePic {
   std::unique_ptr<pic::ParticleSurface<Dim>> surface_;  // the step's liquid level set (levelset surface)
   std::vector<std::uint8_t> solid_;  // per cell id: centre inside the solid (empty: no solid)
   std::vector<double> u_, u_transferred_, p_;
+  std::vector<double> face_beta_;  ///< projection = mass: beta per face id (this step's transfer)
   std::vector<std::uint8_t> known_;
   mac::PoissonSystem<Dim> system_;
   // The PPE solver, kept across steps: an AMG solver keeps its hierarchy while the layout stays.

@@ -566,9 +566,10 @@ Scene<Dim> load_scene(const std::string& path) {
   static const toml::table empty;
   {
     const toml::table* t = top.table("solver");
-    const TableReader r(t ? *t : empty, path, "solver",
-                        {"method", "adaptive", "flip", "integrator", "reseed", "reseed_mode", "gravity",
-                         "extrapolation", "advect_cfl", "surface", "surface_radius"});
+    const TableReader r(
+        t ? *t : empty, path, "solver",
+        {"method", "adaptive", "flip", "integrator", "reseed", "reseed_mode", "gravity", "extrapolation",
+         "advect_cfl", "surface", "surface_radius", "projection", "min_face_mass"});
     const std::string method = r.choice("method", {"rbf", "pic", "flip", "apic", "sph"}, std::string("rbf"));
     s.sph = method == "sph";
     o.transfer = parse_pic_transfer(s.sph ? "rbf" : method);
@@ -590,6 +591,13 @@ Scene<Dim> load_scene(const std::string& path) {
     o.surface_radius = r.positive("surface_radius", o.surface_radius);
     LIQUID_VERIFY(o.surface_radius < 2.0, "{}: {} finest cells is too wide (below 2)",
                   r.where("surface_radius"), o.surface_radius);
+    o.projection = parse_pic_projection(r.choice("projection", {"volume", "mass"}, std::string("volume")));
+    LIQUID_VERIFY(o.projection == PicProjection::volume || s.sph || o.transfer != PicTransfer::rbf,
+                  "{}: the mass projection needs method pic, flip or apic (a uniform grid)",
+                  r.where("projection"));
+    o.min_face_mass = r.positive("min_face_mass", o.min_face_mass);
+    LIQUID_VERIFY(o.min_face_mass <= 1.0, "{}: {} is above 1 (a full cell's mass)", r.where("min_face_mass"),
+                  o.min_face_mass);
   }
   if (top.has("grid") || !s.sph) {
     const toml::table* t = top.table("grid");

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "liquid/core/error.hpp"
+#include "liquid/mac/divergence.hpp"
 #include "liquid/pic/adaptive_pic.hpp"
 #include "liquid/tree/builders.hpp"
 
@@ -199,6 +200,12 @@ TEST(AdaptivePic, BadOptionsAndFailuresAreReported) {
   o.fine_level = 5;
   EXPECT_THROW(AdaptivePic<2>{o}, Error);
   EXPECT_THROW(parse_pic_transfer("sph"), Error);
+  EXPECT_THROW(parse_pic_projection("density"), Error);
+  o = {};
+  o.projection = PicProjection::mass;  // the adaptive RBF transfer has no face masses
+  EXPECT_THROW(AdaptivePic<2>{o}, Error);
+  o.adaptive = false, o.transfer = PicTransfer::pic, o.min_face_mass = 0.0;
+  EXPECT_THROW(AdaptivePic<2>{o}, Error);
   for (auto bad : {+[](PicOptions<2>& b) { b.band = -1; }, +[](PicOptions<2>& b) { b.max_jump = 0; },
                    +[](PicOptions<2>& b) { b.flip = 1.5; }, +[](PicOptions<2>& b) { b.flip = std::nan(""); },
                    +[](PicOptions<2>& b) { b.fine_level = 40; }}) {
@@ -359,6 +366,42 @@ TEST(AdaptivePic, LevelSetSurfaceHalvesThePoolsPressureError) {
   EXPECT_LT(error[1], 0.5 * error[0]) << "air cells " << error[0] << ", level set " << error[1];
   EXPECT_LT(speed[1], 2e-2 * std::sqrt(9.81 * 0.5));
   EXPECT_LT(speed[0], 1e-8);
+}
+
+}  // namespace
+}  // namespace liquid
+
+namespace liquid {
+namespace {
+
+// The mass projection (PicProjection::mass): its PPE and its velocity update use the same beta, so
+// every fluid cell is left divergence-free to the solver's tolerance, as with the volume projection;
+// and the two give different flows (beta is not 1 everywhere).
+TEST(AdaptivePic, MassProjectionLeavesTheLiquidDivergenceFree) {
+  std::vector<double> u[2];
+  for (const PicProjection projection : {PicProjection::volume, PicProjection::mass}) {
+    PicOptions<2> o;
+    o.adaptive = false, o.transfer = PicTransfer::pic, o.fine_level = 5, o.reseed = false;
+    o.projection = projection;
+    o.solver.tolerance = 1e-10;
+    AdaptivePic<2> sim(o);
+    sim.seed(levelset::box<2>({Vec<2>::Zero(), Vec<2>(0.4, 0.6)}));
+    for (int s = 0; s < 8; ++s) {
+      sim.advance(sim.stable_dt(1.0, 0.01));
+      const std::vector<double> faces(sim.face_velocity().begin(), sim.face_velocity().end());
+      const std::vector<double> div = mac::fv_divergence<2>(sim.graph(), faces);
+      double umax = 0.0, worst = 0.0;
+      for (double v : faces) umax = std::max(umax, std::abs(v));
+      for (CellId c : sim.classification().fluid) worst = std::max(worst, std::abs(div[c]));
+      const double h = sim.finest_h();
+      EXPECT_LT(worst * h, 1e-6 * umax) << to_string(projection) << ", step " << s;
+    }
+    u[projection == PicProjection::mass] =
+        std::vector<double>(sim.face_velocity().begin(), sim.face_velocity().end());
+  }
+  double differ = 0.0;
+  for (std::size_t f = 0; f < u[0].size(); ++f) differ = std::max(differ, std::abs(u[0][f] - u[1][f]));
+  EXPECT_GT(differ, 1e-4) << "the mass projection gave the volume projection's flow";
 }
 
 }  // namespace
