@@ -382,6 +382,7 @@ void AdaptivePic<Dim>::to_faces(PicStepReport& r) {
     // The transfer's masses are unit particle masses times weights: a full cell's seeded particles
     // (2^Dim) weigh 2^Dim on each of its faces.
     const double full = static_cast<double>(1 << Dim);
+    face_mass_ = faces.weight;
     face_beta_.assign(faces.weight.size(), 1.0);
     for (std::size_t f = 0; f < faces.weight.size(); ++f)
       face_beta_[f] = full / std::max(faces.weight[f], options_.min_face_mass * full);
@@ -606,9 +607,11 @@ void AdaptivePic<Dim>::project(double dt) {
       return;
     }
     // Air-cell surface: the faces next to fluid cells. Level-set surface: the faces next to an
-    // unknown, whose gradient mac or interface_gradients() gave.
+    // unknown, whose gradient mac or interface_gradients() gave. The mass projection also keeps the
+    // transferred value (with gravity) of every other face that holds mass: p = 0 on both its sides,
+    // and extrapolated values there raised the particles' energy (see PicProjection).
     const bool wet = surface_ ? std::isfinite(dn[f]) : cls_.wet(g);
-    known_[f] = wet;
+    known_[f] = wet || (!face_mass_.empty() && face_mass_[f] > 0.0);
     if (wet) u_[f] -= dt * (face_beta_.empty() ? 1.0 : face_beta_[f]) * dn[f];
   });
   check_faces("project");
