@@ -85,7 +85,8 @@ void echo(const Scene<Dim>& s, const RunSettings& settings, bool resumed) {
                  : fmt::format("p = 0 at the particles' level set (radius {} h)", o.surface_radius));
   if (o.projection == PicProjection::mass)
     fmt::print(
-        "  projection  orthogonal in the faces' transferred masses (lightest face {} of a full cell's)\n",
+        "  projection  orthogonal in the faces' transferred masses (lightest face {} of a full cell's); it "
+        "does not keep a still pool still (hydrostatic-pool)\n",
         o.min_face_mass);
   const bool amg = o.solver.kind == linalg::SolverKind::bicgstab_amg ||
                    o.solver.kind == linalg::SolverKind::gmres_amg ||

@@ -12,7 +12,8 @@
 // largest particle speed and fluid-face speed over the run relative to sqrt(g H); the pressure at
 // the end against g (H - y) in L-inf over fluid cells relative to g H; average fluid cells and
 // particles, and their share of the regular run's.
-// Expected (gated): volume drift <= 1%, speeds <= 1e-2 sqrt(g H), pressure error <= 2 h / H.
+// Expected (gated): volume drift <= 1%, speeds <= 1e-2 sqrt(g H), pressure error <= 2 h / H; not for
+// regular-pic-mass (the mass projection), which stirs the pool: measured, gated, warned about.
 
 #include <cmath>
 
@@ -32,11 +33,18 @@ struct Method {
   const char* name;
   bool adaptive;
   PicTransfer transfer;
+  PicProjection projection = PicProjection::volume;
 };
+// regular-pic-mass: PIC with the projection orthogonal in the faces' transferred masses
+// (PicProjection::mass), under which a closed dam break's energy never rises (kinetic-energy). It
+// does not keep the pool still: beta follows the particles' sampling, which varies along the
+// floor, so g / beta has a curl that no pressure balances and the pool starts to stir (measured,
+// gated and warned about; not held to the bounds below).
 const Method kMethods[] = {{"regular-pic", false, PicTransfer::pic},
                            {"adaptive-rbf", true, PicTransfer::rbf},
                            {"regular-flip", false, PicTransfer::flip},
-                           {"regular-apic", false, PicTransfer::apic}};
+                           {"regular-apic", false, PicTransfer::apic},
+                           {"regular-pic-mass", false, PicTransfer::pic, PicProjection::mass}};
 
 struct Outcome {
   double volume_drift = 0.0, height_drift = 0.0, particle_speed = 0.0, face_speed = 0.0, pressure = 0.0;
@@ -68,6 +76,7 @@ Outcome run_pool(const Method& m, bool full, Table& series) {
   o.fine_level = Dim == 2 ? 6 : 4;
   o.coarse_level = Dim == 2 ? 3 : 2;
   o.transfer = m.transfer;
+  o.projection = m.projection;
   o.solver.kind = default_ppe_solver(m.adaptive, Dim);  // as a scene file would: PCG on the regular grid
   AdaptivePic<Dim> sim(o);
   Vec<Dim> hi = Vec<Dim>::Ones();
@@ -137,6 +146,13 @@ void study(const CaseOptions& options, Table& table, Table& series, Table& phase
     result.gate.push_back(
         {key + " max particle speed", GateFigure::Kind::error, std::max(o.particle_speed, 1e-6)});
     result.gate.push_back({key + " pressure error", GateFigure::Kind::error, std::max(o.pressure, 1e-6)});
+    if (m.projection == PicProjection::mass) {
+      result.warnings.push_back(fmt::format(
+          "{}: the mass projection stirs the still pool: particle speed up to {:.2e} sqrt(gH), volume drift "
+          "{:.2e}, pressure error {:.2e} gH",
+          key, o.particle_speed, o.volume_drift, o.pressure));
+      continue;
+    }
     result.expect(o.volume_drift <= 0.01, fmt::format("{}: volume drift {:.2e} > 1%", key, o.volume_drift));
     result.expect(o.particle_speed <= 1e-2,
                   fmt::format("{}: particle speed {:.2e} sqrt(gH) > 1e-2", key, o.particle_speed));

@@ -25,7 +25,8 @@
 // the particles' masses. Run again with the projection orthogonal in those masses (PicProjection::mass,
 // which also keeps the transferred value of faces that hold mass but are not projected), PIC, FLIP and
 // APIC never raise E (asserted for PIC and APIC, whose transfers cannot raise it: the issue's "PIC and
-// APIC never gain energy" holds there, and only there); every other rise is warned
+// APIC never gain energy" holds there, and only there; that projection does not keep a still pool still,
+// see hydrostatic-pool, so it finds the cause without being a method); every other rise is warned
 // about and gated. With reseeding, PIC and APIC do not rise above their earlier peak by more than 5e-3
 // (asserted); every rise over 5e-3 is warned about, and gated. RBF keeps more energy than PIC (the paper's
 // Fig. 10), compared by the total energy E at the end: K at one instant is the phase of the slosh as much as
