@@ -382,10 +382,10 @@ void AdaptivePic<Dim>::to_faces(PicStepReport& r) {
     // The transfer's masses are unit particle masses times weights: a full cell's seeded particles
     // (2^Dim) weigh 2^Dim on each of its faces.
     const double full = static_cast<double>(1 << Dim);
-    face_mass_ = faces.weight;
-    face_beta_.assign(faces.weight.size(), 1.0);
-    for (std::size_t f = 0; f < faces.weight.size(); ++f)
-      face_beta_[f] = full / std::max(faces.weight[f], options_.min_face_mass * full);
+    face_mass_ = std::move(faces.weight);
+    face_beta_.resize(face_mass_.size());
+    for (std::size_t f = 0; f < face_mass_.size(); ++f)
+      face_beta_[f] = full / std::max(face_mass_[f], options_.min_face_mass * full);
   }
   u_ = std::move(faces.value);
   known_ = std::move(faces.known);

@@ -500,11 +500,12 @@ void AdaptiveSph<Dim>::patch_lists(const std::vector<std::int32_t>& origin) {
       lists.index[static_cast<std::size_t>(at[born[b]]++)] = j;
       lists.index[static_cast<std::size_t>(at[j]++)] = born[b];
     }
-    // A survivor's gained pairs come after its kept ones, in ascending order (the new particles are
-    // visited in it): each is moved down into place. A new particle's row is sorted whole.
 #pragma omp parallel for schedule(dynamic, 1024)
   for (int k = 0; k < n; ++k) {
     if (!gained[k]) continue;
+    // A survivor's gained pairs come after its kept ones, in ascending order (the new particles are
+    // visited in it): each is moved down into place (an insertion merge; std::inplace_merge would
+    // allocate a buffer per row). A new particle's row is sorted whole.
     const auto first = lists.index.begin() + lists.begin[k], last = lists.index.begin() + lists.begin[k + 1];
     if (is_born[k] || !in_order) {
       std::sort(first, last);
