@@ -474,20 +474,31 @@ void AdaptiveSph<Dim>::patch_lists(const std::vector<std::int32_t>& origin) {
   }
   std::vector<char> gained(n, in_order ? 0 : 1);
   NeighbourLists& lists = spare_;
-  lists.begin.assign(n + 1, 0);
+  // Each row gets room to grow (row_room), so that refresh_movers can rewrite a few rows in place.
+  std::vector<std::int64_t> size(n, 0);
 #pragma omp parallel for schedule(static)
   for (int k = 0; k < n; ++k) {
     std::int64_t kept = 0;
     if (origin[k] >= 0)
       for (int j : nbrs_.of(origin[k])) kept += renumber[j] >= 0 ? 1 : 0;
-    lists.begin[k + 1] = kept;
+    size[k] = kept;
   }
   for (std::size_t b = 0; b < born.size(); ++b) {
     gained[born[b]] = 1;
-    for (std::int32_t j : partners[b]) ++lists.begin[born[b] + 1], ++lists.begin[j + 1], gained[j] = 1;
+    for (std::int32_t j : partners[b]) ++size[born[b]], ++size[j], gained[j] = 1;
   }
-  for (int k = 0; k < n; ++k) lists.begin[k + 1] += lists.begin[k];
+  lists.begin.resize(n + 1);
+  lists.end.resize(n);
+  lists.room.resize(n);
+  lists.begin[0] = 0;
+  for (int k = 0; k < n; ++k) {
+    lists.end[k] = lists.begin[k] + size[k];
+    lists.room[k] = lists.end[k] + row_room(size[k]);
+    lists.begin[k + 1] = lists.room[k];
+  }
+  lists.index.reserve(static_cast<std::size_t>(lists.begin[n] + lists.begin[n] / 4));
   lists.index.resize(static_cast<std::size_t>(lists.begin[n]));
+  packed_entries_ = lists.begin[n];
   std::vector<std::int64_t> at(lists.begin.begin(), lists.begin.end() - 1);
 #pragma omp parallel for schedule(static)
   for (int k = 0; k < n; ++k)
@@ -506,7 +517,7 @@ void AdaptiveSph<Dim>::patch_lists(const std::vector<std::int32_t>& origin) {
     // A survivor's gained pairs come after its kept ones, in ascending order (the new particles are
     // visited in it): each is moved down into place (an insertion merge; std::inplace_merge would
     // allocate a buffer per row). A new particle's row is sorted whole.
-    const auto first = lists.index.begin() + lists.begin[k], last = lists.index.begin() + lists.begin[k + 1];
+    const auto first = lists.index.begin() + lists.begin[k], last = lists.index.begin() + lists.end[k];
     if (is_born[k] || !in_order) {
       std::sort(first, last);
       continue;
@@ -539,8 +550,138 @@ int AdaptiveSph<Dim>::refresh_movers() {
     movers += moved ? 1 : 0;
   }
   if (movers == 0 || movers > n / 10) return 0;
-  patch_lists(origin);
+  if (nbrs_.packed()) {
+    // Lists of a whole search: every row gets its own storage as its room (none to spare).
+    nbrs_.end.assign(nbrs_.begin.begin() + 1, nbrs_.begin.end());
+    nbrs_.room = nbrs_.end;
+    packed_entries_ = static_cast<std::int64_t>(nbrs_.index.size());
+  }
+  // Rows that outgrow their room move to the end of the storage; past a quarter more than packed,
+  // the whole lists are written again (patch_lists packs them, each row with its room).
+  if (static_cast<std::int64_t>(nbrs_.index.size()) > packed_entries_ + packed_entries_ / 4) {
+    patch_lists(origin);
+    return movers;
+  }
+  std::vector<std::int32_t> moved;
+  moved.reserve(static_cast<std::size_t>(movers));
+  for (int i = 0; i < n; ++i)
+    if (origin[i] < 0) moved.push_back(i);
+  refresh_in_place(moved);
   return movers;
+}
+
+template <int Dim>
+void AdaptiveSph<Dim>::refresh_in_place(const std::vector<std::int32_t>& movers) {
+  // The movers are built where they are now, their rows found again around them in a grid of the
+  // built positions (as in patch_lists). A survivor's row changes only by the movers that entered or
+  // left its reach: those entries are put in or taken out in place, keeping the row ascending. The
+  // lists are then exactly those a whole search at the built positions would give.
+  const int n = p_.size(), n_movers = static_cast<int>(movers.size());
+  const double skin = options_.neighbour_skin * options_.spacing;
+  std::vector<char> is_mover(n, 0);
+  for (std::int32_t k : movers) is_mover[k] = 1, built_at_[k] = p_.x[k];
+  double max_reach = 0.0;
+  for (int k = 0; k < n; ++k) max_reach = std::max(max_reach, p_.radius[k] + skin);
+  CellGrid<Dim> grid;
+  grid.build(built_at_, max_reach);
+  std::vector<std::vector<std::int32_t>> partners(n_movers);
+  // Survivors' edits: (row, 2 mover + 1 if it leaves the row, + 0 if it enters it), so that sorting
+  // puts each row's edits in the movers' order.
+  using Edit = std::pair<std::int32_t, std::int32_t>;
+  std::vector<std::vector<Edit>> edits(n_movers);
+#pragma omp parallel for schedule(dynamic, 16)
+  for (int m = 0; m < n_movers; ++m) {
+    const int k = movers[m];
+    std::vector<std::int32_t>& row = partners[m];
+    grid.candidates(built_at_[k], [&](int j) {
+      if (j == k) return;
+      const double reach = std::max(p_.radius[k], p_.radius[j]) + skin;
+      if ((built_at_[k] - built_at_[j]).squaredNorm() < reach * reach) row.push_back(j);
+    });
+    std::sort(row.begin(), row.end());
+    const auto old = nbrs_.of(k);
+    std::size_t a = 0, b = 0;
+    while (a < old.size() || b < row.size()) {
+      if (b == row.size() || (a < old.size() && old[a] < row[b])) {
+        if (!is_mover[old[a]]) edits[m].emplace_back(old[a], 2 * k + 1);
+        ++a;
+      } else if (a == old.size() || row[b] < old[a]) {
+        if (!is_mover[row[b]]) edits[m].emplace_back(row[b], 2 * k);
+        ++b;
+      } else {
+        ++a, ++b;
+      }
+    }
+  }
+  std::vector<Edit> all;
+  for (const auto& e : edits) all.insert(all.end(), e.begin(), e.end());
+  std::sort(all.begin(), all.end());
+  // Where each changed row goes: in its own storage when it fits, else at the end.
+  std::vector<std::int32_t> edited;  // the first edit of each survivor's row in `all`
+  for (std::size_t e = 0; e < all.size(); ++e)
+    if (e == 0 || all[e].first != all[e - 1].first) edited.push_back(static_cast<std::int32_t>(e));
+  const int n_edited = static_cast<int>(edited.size());
+  std::vector<std::int64_t> from(n_edited), new_size(n_edited);
+  std::int64_t tail = static_cast<std::int64_t>(nbrs_.index.size());
+  auto place = [&](int row, std::int64_t need) {
+    if (nbrs_.begin[row] + need <= nbrs_.room[row]) return;
+    nbrs_.begin[row] = tail;
+    nbrs_.room[row] = tail + need + row_room(need);
+    tail = nbrs_.room[row];
+  };
+  for (int m = 0; m < n_movers; ++m) place(movers[m], static_cast<std::int64_t>(partners[m].size()));
+  for (int r = 0; r < n_edited; ++r) {
+    const std::size_t first = static_cast<std::size_t>(edited[r]);
+    const std::size_t last = r + 1 < n_edited ? static_cast<std::size_t>(edited[r + 1]) : all.size();
+    const int row = all[first].first;
+    std::int64_t grow = 0;
+    for (std::size_t e = first; e < last; ++e) grow += (all[e].second & 1) ? -1 : 1;
+    from[r] = nbrs_.begin[row];
+    new_size[r] = nbrs_.end[row] - nbrs_.begin[row] + grow;
+    place(row, new_size[r]);
+  }
+  nbrs_.index.resize(static_cast<std::size_t>(tail));
+#pragma omp parallel for schedule(dynamic, 16)
+  for (int m = 0; m < n_movers; ++m) {
+    const int k = movers[m];
+    std::copy(partners[m].begin(), partners[m].end(), nbrs_.index.begin() + nbrs_.begin[k]);
+    nbrs_.end[k] = nbrs_.begin[k] + static_cast<std::int64_t>(partners[m].size());
+  }
+#pragma omp parallel
+  {
+    std::vector<std::int32_t> merged;
+#pragma omp for schedule(dynamic, 64)
+    for (int r = 0; r < n_edited; ++r) {
+      const std::size_t first = static_cast<std::size_t>(edited[r]);
+      const std::size_t last = r + 1 < n_edited ? static_cast<std::size_t>(edited[r + 1]) : all.size();
+      const int row = all[first].first;
+      merged.clear();
+      std::size_t e = first;
+      for (std::int64_t q = from[r]; q < nbrs_.end[row]; ++q) {
+        const std::int32_t j = nbrs_.index[static_cast<std::size_t>(q)];
+        // Movers entering before j (one leaving lies at its own entry: the row holds it).
+        for (; e < last && all[e].second < 2 * j; ++e) {
+          LIQUID_ASSERT(all[e].second % 2 == 0, "sph: mover {} left a row ({}) that did not hold it",
+                        all[e].second / 2, row);
+          merged.push_back(all[e].second / 2);
+        }
+        if (e < last && all[e].second == 2 * j + 1) {
+          ++e;  // j left this row's reach
+          continue;
+        }
+        merged.push_back(j);
+      }
+      for (; e < last; ++e) {
+        LIQUID_ASSERT(all[e].second % 2 == 0, "sph: mover {} left a row ({}) that did not hold it",
+                      all[e].second / 2, row);
+        merged.push_back(all[e].second / 2);
+      }
+      LIQUID_ASSERT(static_cast<std::int64_t>(merged.size()) == new_size[r],
+                    "sph: a refreshed row lost count");
+      std::copy(merged.begin(), merged.end(), nbrs_.index.begin() + nbrs_.begin[row]);
+      nbrs_.end[row] = nbrs_.begin[row] + new_size[r];
+    }
+  }
 }
 
 template <int Dim>

@@ -210,6 +210,10 @@ class AdaptiveSph {
   const Sizes& sizes() const { return sizes_; }
   const SphOptions<Dim>& options() const { return options_; }
   const PhaseTimer& timer() const { return timer_; }
+  /// The kept neighbour lists (with the skin's pairs) and the positions they were found at (empty
+  /// when no lists are current): what the tests hold against a whole search.
+  const NeighbourLists& neighbour_lists() const { return nbrs_; }
+  std::span<const Vec<Dim>> built_positions() const { return built_at_; }
   double time() const { return time_; }
   long steps() const { return steps_; }
   /// Gravity in the container's frame at time t (turned against the container's turn).
@@ -247,6 +251,11 @@ class AdaptiveSph {
   /// With patch_lists: when at most a tenth of the particles have moved half the skin, their lists
   /// are found again around them (patch_lists) and their number returned; otherwise 0, nothing done.
   int refresh_movers();
+  /// refresh_movers' work when the lists have room: only the movers' rows and the rows they enter or
+  /// leave are rewritten (`movers` ascending, each moved half the skin).
+  void refresh_in_place(const std::vector<std::int32_t>& movers);
+  /// The room a row of `size` entries is given to grow into when the lists are written whole.
+  static std::int64_t row_room(std::int64_t size) { return 2 + size / 16; }
   void collide();
   /// How close to a wall or an obstacle collide() lets a particle come: half a level-0 spacing.
   double collision_margin() const { return 0.5 * options_.spacing; }
@@ -269,10 +278,11 @@ class AdaptiveSph {
   SphParticles<Dim> p_;
   Boundary<Dim> walls_;
   PointTree<Dim> tree_;
-  NeighbourLists nbrs_;             ///< the pairs within max(r_i, r_j) + skin at built_at_
-  std::vector<Vec<Dim>> built_at_;  ///< the positions nbrs_ were found at (empty: none current)
-  NeighbourLists spare_;            ///< patch_lists' output storage, kept between patches
-  NeighbourLists skinless_;         ///< within_support's output, kept between resamplings
+  NeighbourLists nbrs_;              ///< the pairs within max(r_i, r_j) + skin at built_at_
+  std::vector<Vec<Dim>> built_at_;   ///< the positions nbrs_ were found at (empty: none current)
+  NeighbourLists spare_;             ///< patch_lists' output storage, kept between patches
+  std::int64_t packed_entries_ = 0;  ///< nbrs_'s storage when last written whole
+  NeighbourLists skinless_;          ///< within_support's output, kept between resamplings
   PhaseTimer timer_;
   std::mt19937_64 rng_;
   double time_ = 0.0;

@@ -25,6 +25,15 @@ struct Cloud {
 };
 }  // namespace
 
+long NeighbourLists::n_pairs() const {
+  if (packed()) return static_cast<long>(index.size()) / 2;
+  const int n = n_particles();
+  long entries = 0;
+#pragma omp parallel for schedule(static) reduction(+ : entries)
+  for (int i = 0; i < n; ++i) entries += static_cast<long>(end[i] - begin[i]);
+  return entries / 2;
+}
+
 template <int Dim>
 struct PointTree<Dim>::Impl {
   using Index = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<double, Cloud<Dim>>,

@@ -100,16 +100,23 @@ class CellGrid {
 };
 
 /// Symmetric neighbour lists in compressed rows: the neighbours of i (never i itself) are
-/// index[begin[i] .. begin[i+1]), in ascending index order.
+/// index[begin[i] .. end of row i), in ascending index order. Packed (`end` empty), row i ends where
+/// row i+1 begins. With room to grow (as AdaptiveSph keeps them, so that a few rows can be rewritten
+/// in place), row i ends at end[i], its storage at room[i], and rows need not lie in index order:
+/// index may hold unused stretches.
 struct NeighbourLists {
   std::vector<std::int64_t> begin{0};
+  std::vector<std::int64_t> end;   ///< empty: packed rows
+  std::vector<std::int64_t> room;  ///< where each row's storage ends (with `end` only)
   std::vector<std::int32_t> index;
 
   int n_particles() const { return static_cast<int>(begin.size()) - 1; }
+  bool packed() const { return end.empty(); }
+  std::int64_t end_of(int i) const { return end.empty() ? begin[i + 1] : end[i]; }
   std::span<const std::int32_t> of(int i) const {
-    return {index.data() + begin[i], static_cast<std::size_t>(begin[i + 1] - begin[i])};
+    return {index.data() + begin[i], static_cast<std::size_t>(end_of(i) - begin[i])};
   }
-  long n_pairs() const { return static_cast<long>(index.size()) / 2; }
+  long n_pairs() const;
 };
 
 /// Finds every pair with |x_i - x_j| < max(r_i, r_j). `tree` must hold exactly the points x. OpenMP.

@@ -736,6 +736,26 @@ TEST(SphResample, SplitAndMergeConserveMassAndMomentum3D) {
 }
 
 template <int Dim>
+::testing::AssertionResult kept_lists_are_a_search(const AdaptiveSph<Dim>& sim, double skin) {
+  const auto built = sim.built_positions();
+  if (built.empty()) return ::testing::AssertionSuccess();  // none current
+  const SphParticles<Dim>& p = sim.particles();
+  std::vector<double> reach(p.radius);
+  for (double& r : reach) r += skin;
+  const NeighbourLists whole = find_neighbours_cells<Dim>(built, reach);
+  const NeighbourLists& kept = sim.neighbour_lists();
+  if (kept.n_particles() != p.size())
+    return ::testing::AssertionFailure()
+           << kept.n_particles() << " kept rows for " << p.size() << " particles";
+  for (int i = 0; i < p.size(); ++i)
+    if (!std::ranges::equal(kept.of(i), whole.of(i)))
+      return ::testing::AssertionFailure()
+             << "the kept row of particle " << i << " is not a whole search's (" << kept.of(i).size()
+             << " entries against " << whole.of(i).size() << ")";
+  return ::testing::AssertionSuccess();
+}
+
+template <int Dim>
 void skin_changes_nothing() {
   // A collapsing column, adaptive, 60 steps: lists kept between steps (the skin, with the few
   // particles that moved half of it refreshed alone) against lists found every step. The state must
@@ -769,6 +789,10 @@ void skin_changes_nothing() {
       searches += r.searched;
       refreshed += r.refreshed;
       changes += r.resampling.split + r.resampling.merged;
+      // Kept lists, however patched or refreshed in place, must be exactly those of a whole search
+      // at the positions they were built at (the same entries, in the same order).
+      if (skin > 0.0)
+        EXPECT_TRUE(kept_lists_are_a_search(sim, skin * o.spacing)) << "skin " << skin << ", step " << k;
     }
     return sim.state();
   };
