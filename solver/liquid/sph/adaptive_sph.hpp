@@ -124,7 +124,8 @@ struct SphOptions {
   /// Timed by sph-gain-scaling (3D a/80, adaptive): neighbours 0.93 s a step with whole searches,
   /// 0.45 with the movers refreshed by a patch that built a k-d tree and wrote its rows into fresh
   /// storage, 0.18 with a grid, kept storage and every resampling patched (speed gain 1.77 -> 2.44
-  /// -> 2.93).
+  /// -> 2.93); with the movers' rows refreshed in place the gain is 3.18 (a/48: refresh 0.30 -> 0.17
+  /// us a particle a step).
   bool patch_lists = true;
   /// Where the liquid meets a wall or an obstacle, its boundary is the solid's surface: footpoints
   /// found within a level-0 spacing of a solid are replaced by the point of the solid nearest the
@@ -249,7 +250,8 @@ class AdaptiveSph {
   /// particles' pairs are found around them.
   void patch_lists(const std::vector<std::int32_t>& origin);
   /// With patch_lists: when at most a tenth of the particles have moved half the skin, their lists
-  /// are found again around them (patch_lists) and their number returned; otherwise 0, nothing done.
+  /// are found again around them (in place, or by patch_lists when the rows' storage has grown past
+  /// 5/4 of its packed size) and their number returned; otherwise 0, nothing done.
   int refresh_movers();
   /// refresh_movers' work when the lists have room: only the movers' rows and the rows they enter or
   /// leave are rewritten (`movers` ascending, each moved half the skin).
