@@ -40,13 +40,22 @@ const char* to_string(PicSurface surface) {
 }
 
 const char* to_string(PicProjection projection) {
-  return projection == PicProjection::volume ? "volume" : "mass";
+  switch (projection) {
+    case PicProjection::volume:
+      return "volume";
+    case PicProjection::mass:
+      return "mass";
+    case PicProjection::split:
+      return "split";
+  }
+  return "?";
 }
 
 PicProjection parse_pic_projection(const std::string& name) {
   if (name == "volume") return PicProjection::volume;
   if (name == "mass") return PicProjection::mass;
-  throw Error(fmt::format("unknown projection '{}' (choices: volume, mass)", name));
+  if (name == "split") return PicProjection::split;
+  throw Error(fmt::format("unknown projection '{}' (choices: volume, mass, split)", name));
 }
 
 PicSurface parse_pic_surface(const std::string& name) {
@@ -378,7 +387,7 @@ void AdaptivePic<Dim>::to_faces(PicStepReport& r) {
   else
     r.p2g = particles_to_faces<Dim>(graph_, particles_, bins_, options_.rbf, faces);
   r.unknown_faces = r.p2g.empty;
-  if (options_.projection == PicProjection::mass) {
+  if (options_.projection != PicProjection::volume) {
     // The transfer's masses are unit particle masses times weights: a full cell's seeded particles
     // (2^Dim) weigh 2^Dim on each of its faces.
     const double full = static_cast<double>(1 << Dim);
@@ -406,6 +415,30 @@ void AdaptivePic<Dim>::forces(double dt) {
     u_[f] = cls_.solid_face(g) ? 0.0 : (g.is_boundary() ? 0.0 : u_[f]) + dt * options_.gravity[g.axis];
   });
   check_faces("forces");
+}
+
+template <int Dim>
+void AdaptivePic<Dim>::project_gravity(double dt) {
+  // PicProjection::split: gravity's kick alone, projected in volumes (its pressure is the
+  // hydrostatic one wherever the liquid is at rest), is added back to the transferred velocity,
+  // which the mass projection then projects.
+  std::vector<double> kick(u_.size(), 0.0);
+  graph_.for_each_face([&](FaceId f) {
+    const GraphFace& g = graph_.face(f);
+    if (!cls_.solid_face(g)) kick[f] = dt * options_.gravity[g.axis];
+  });
+  std::vector<double> rest(u_.size());
+  for (std::size_t f = 0; f < u_.size(); ++f) rest[f] = u_[f] - kick[f];
+  u_ = std::move(kick);
+  volume_pass_ = true;
+  assemble(dt);
+  PicStepReport gravity;
+  solve_pressure(gravity);
+  project(dt);
+  volume_pass_ = false;
+  gravity_pressure_ = p_;
+  for (std::size_t f = 0; f < u_.size(); ++f) u_[f] += rest[f];
+  check_faces("gravity");
 }
 
 template <int Dim>
@@ -491,7 +524,7 @@ void AdaptivePic<Dim>::assemble(double dt) {
       if (graph_.face(f).boundary == side) return n[axis] * u_[f] / dt;
     return 0.0;
   };
-  if (options_.projection == PicProjection::mass) problem.face_coefficient = face_beta_;
+  if (options_.projection != PicProjection::volume && !volume_pass_) problem.face_coefficient = face_beta_;
   system_ = mac::assemble_poisson<Dim>(graph_, problem, options_.poisson);
   if (!solid_.empty()) fold_solid_rows();
 }
@@ -611,8 +644,8 @@ void AdaptivePic<Dim>::project(double dt) {
     // transferred value (with gravity) of every other face that holds mass: p = 0 on both its sides,
     // and extrapolated values there raised the particles' energy (see PicProjection).
     const bool wet = surface_ ? std::isfinite(dn[f]) : cls_.wet(g);
-    known_[f] = wet || (!face_mass_.empty() && face_mass_[f] > 0.0);
-    if (wet) u_[f] -= dt * (face_beta_.empty() ? 1.0 : face_beta_[f]) * dn[f];
+    if (!volume_pass_) known_[f] = wet || (!face_mass_.empty() && face_mass_[f] > 0.0);
+    if (wet) u_[f] -= dt * (face_beta_.empty() || volume_pass_ ? 1.0 : face_beta_[f]) * dn[f];
   });
   check_faces("project");
 }
@@ -742,8 +775,13 @@ PicStepReport AdaptivePic<Dim>::advance(double dt) {
     if (options_.adaptive) phase("grid", [&] { adapt_grid(r); });
     phase("p2g", [&] { to_faces(r); });
     phase("forces", [&] { forces(dt); });
+    if (options_.projection == PicProjection::split) phase("gravity", [&] { project_gravity(dt); });
     phase("laplacian", [&] { assemble(dt); });
-    phase("ppe", [&] { solve_pressure(r); });
+    phase("ppe", [&] {
+      solve_pressure(r);
+      if (options_.projection == PicProjection::split)
+        for (std::size_t c = 0; c < p_.size(); ++c) p_[c] += gravity_pressure_[c];
+    });
     phase("project", [&] {
       r.grid_energy_before = grid_energy();
       project(dt);

@@ -67,7 +67,7 @@ PicSurface parse_pic_surface(const std::string& name);
 /// sqrt(gH) within 2 s in 2D, 0.08 within 0.5 s in 3D; the volume projection: 1e-9): beta follows
 /// the particles' sampling, which varies along the floor, so g / beta has a curl no pressure
 /// balances. It shows where the energy comes from; it is not a method for scenes.
-enum class PicProjection { volume, mass };
+enum class PicProjection { volume, mass, split };
 const char* to_string(PicProjection projection);
 /// "volume", "mass"; throws naming the choices.
 PicProjection parse_pic_projection(const std::string& name);
@@ -245,6 +245,8 @@ class AdaptivePic {
   void assemble(double dt);
   void solve_pressure(PicStepReport& r);
   void project(double dt);
+  /// PicProjection::split's first pass (see there).
+  void project_gravity(double dt);
   void extrapolate();
   double grid_energy() const;  ///< see PicStepReport::grid_energy_before
   void to_particles(PicStepReport& r);
@@ -266,6 +268,8 @@ class AdaptivePic {
   std::vector<double> u_, u_transferred_, p_;
   /// projection = mass: the transfer's mass and beta per face id (this step's)
   std::vector<double> face_beta_, face_mass_;
+  std::vector<double> gravity_pressure_;  ///< split: the pressure of gravity's kick, by cell
+  bool volume_pass_ = false;              ///< split: assemble and project in volumes
   std::vector<std::uint8_t> known_;
   mac::PoissonSystem<Dim> system_;
   // The PPE solver, kept across steps: an AMG solver keeps its hierarchy while the layout stays.
