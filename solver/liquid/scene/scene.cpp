@@ -591,10 +591,11 @@ Scene<Dim> load_scene(const std::string& path) {
     o.surface_radius = r.positive("surface_radius", o.surface_radius);
     LIQUID_VERIFY(o.surface_radius < 2.0, "{}: {} finest cells is too wide (below 2)",
                   r.where("surface_radius"), o.surface_radius);
-    o.projection = parse_pic_projection(r.choice("projection", {"volume", "mass"}, std::string("volume")));
+    o.projection =
+        parse_pic_projection(r.choice("projection", {"volume", "mass", "split"}, std::string("volume")));
     LIQUID_VERIFY(o.projection == PicProjection::volume || s.sph || o.transfer != PicTransfer::rbf,
-                  "{}: the mass projection needs method pic, flip or apic (a uniform grid)",
-                  r.where("projection"));
+                  "{}: the {} projection needs method pic, flip or apic (a uniform grid)",
+                  r.where("projection"), to_string(o.projection));
     o.min_face_mass = r.positive("min_face_mass", o.min_face_mass);
     LIQUID_VERIFY(o.min_face_mass <= 1.0, "{}: {} is above 1 (a full cell's mass)", r.where("min_face_mass"),
                   o.min_face_mass);
