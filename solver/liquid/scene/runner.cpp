@@ -278,8 +278,9 @@ const PicStepReport& SceneRunner<Dim>::step() {
   const double dt = detail::next_step(t, sim_->stable_dt(t.cfl, t.dt_max), sim_->time());
   last_ = sim_->advance(dt);
   ++steps_;
-  ppe_iterations_ += last_.ppe.iterations;
-  ppe_failures_ += last_.ppe.converged() ? 0 : 1;
+  ppe_iterations_ +=
+      last_.ppe.iterations + last_.ppe_gravity.iterations;  // the split projection solves twice
+  ppe_failures_ += (last_.ppe.converged() ? 0 : 1) + (last_.ppe_gravity.converged() ? 0 : 1);
   ppe_reused_ += last_.ppe.hierarchy_reused ? 1 : 0;
   sum_fluid_ += static_cast<double>(last_.n_fluid_cells);
   sum_cells_ += static_cast<double>(last_.n_cells);

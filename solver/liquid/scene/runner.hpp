@@ -67,8 +67,8 @@ struct RunSummary {
   /// grid at the same finest h needs for the same liquid (computed from this run, not a second run).
   double regular_cells = 0.0, regular_particles = 0.0;
   std::map<std::string, double> seconds;  ///< per phase, average per step
-  long ppe_iterations = 0;                ///< total
-  long ppe_failures = 0;                  ///< steps whose PPE did not converge (continue_on_failure)
+  long ppe_iterations = 0;                ///< total (both solves of the split projection)
+  long ppe_failures = 0;                  ///< PPE solves that did not converge (continue_on_failure)
   long ppe_reused = 0;  ///< steps whose PPE kept the last step's AMG hierarchy (same layout)
   int threads = 1;
   double wall = 0.0;  ///< seconds of the whole run (frames and checkpoints included)
