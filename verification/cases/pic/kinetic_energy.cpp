@@ -30,8 +30,9 @@
 // PicProjection::split, projects gravity's kick in volumes first and the rest in masses: it keeps a
 // still pool still, and measured here (fixed masses) its largest rises are PIC 0, FLIP 8.7e-5, APIC
 // 3.6e-4 at level 5 (volume: 0, 6.3e-4, 6.2e-3), PIC 0, FLIP 0, APIC 1.5e-4 at level 6 (1.4e-3,
-// 2.1e-3, 2.1e-3), but FLIP 4.3e-3 and APIC 1.1e-2 in 3D at level 4 (volume: 6.2e-4 and 4.9e-3):
-// not a cure, since the volume-projected kick does work against the particles that has no sign.
+// 2.1e-3, 2.1e-3), but FLIP 4.3e-3 and APIC 1.1e-2 in 3D at level 4 (volume: 6.2e-4 and 4.9e-3;
+// at level 5, outside this case, 5.4e-4 and 1.2e-3 against 6.6e-4 and 3.2e-3): not a cure, since the
+// volume-projected kick does work against the particles that has no sign.
 // Every rise other than the mass projection's PIC and APIC is warned about and gated. With reseeding, PIC and APIC do not rise above their earlier peak by more than 5e-3
 // (asserted); every rise over 5e-3 is warned about, and gated. RBF keeps more energy than PIC (the paper's
 // Fig. 10), compared by the total energy E at the end: K at one instant is the phase of the slosh as much as
