@@ -577,6 +577,7 @@ void AdaptiveSph<Dim>::refresh_in_place(const std::vector<std::int32_t>& movers)
   // left its reach: those entries are put in or taken out in place, keeping the row ascending. The
   // lists are then exactly those a whole search at the built positions would give.
   const int n = p_.size(), n_movers = static_cast<int>(movers.size());
+  LIQUID_VERIFY(n < (1 << 30), "sph: {} particles are too many for the refresh's edit keys (2 index + 1)", n);
   const double skin = options_.neighbour_skin * options_.spacing;
   std::vector<char> is_mover(n, 0);
   for (std::int32_t k : movers) is_mover[k] = 1, built_at_[k] = p_.x[k];
