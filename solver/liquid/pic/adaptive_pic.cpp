@@ -455,8 +455,11 @@ void AdaptivePic<Dim>::assemble(double dt) {
   if (options_.surface == PicSurface::levelset) {
     // Unknowns where the particles' level set is negative: the fluid cells and the air cells next
     // to them, by the sign at their centres; the PPE cuts every edge leaving them at its zero set.
-    surface_ = std::make_unique<pic::ParticleSurface<Dim>>(graph_, cls_, particles_.x, options_.fine_level,
-                                                           options_.surface_radius);
+    // The split projection's mass pass keeps the surface its gravity pass built: same particles, same step.
+    const bool built_this_step = options_.projection == PicProjection::split && !volume_pass_ && surface_;
+    if (!built_this_step)
+      surface_ = std::make_unique<pic::ParticleSurface<Dim>>(graph_, cls_, particles_.x, options_.fine_level,
+                                                             options_.surface_radius);
     std::vector<std::uint8_t> seen(graph_.cell_capacity(), 0);
     const auto consider = [&](CellId c) {
       if (seen[c] || cls_.is_solid(c)) return;

@@ -424,6 +424,27 @@ void AdaptiveSph<Dim>::redistance_and_resample(SphStepReport& report) {
 }
 
 template <int Dim>
+CellGrid<Dim> AdaptiveSph<Dim>::grid_of(std::span<const Vec<Dim>> built) const {
+  double max_reach = 0.0;
+  for (double r : p_.radius) max_reach = std::max(max_reach, r);
+  CellGrid<Dim> grid;
+  grid.build(built, max_reach + options_.neighbour_skin * options_.spacing);
+  return grid;
+}
+
+template <int Dim>
+template <class Skip>
+void AdaptiveSph<Dim>::partners_of(const CellGrid<Dim>& grid, std::span<const Vec<Dim>> built, int k,
+                                   Skip skip, std::vector<std::int32_t>& out) const {
+  const double skin = options_.neighbour_skin * options_.spacing;
+  grid.candidates(built[k], [&](int j) {
+    if (j == k || skip(j)) return;
+    const double reach = std::max(p_.radius[k], p_.radius[j]) + skin;
+    if ((built[k] - built[j]).squaredNorm() < reach * reach) out.push_back(j);
+  });
+}
+
+template <int Dim>
 void AdaptiveSph<Dim>::patch_lists(const std::vector<std::int32_t>& origin) {
   // Kept lists hold every pair within max(r_i, r_j) + skin at the built positions, and stay valid
   // while no particle has moved half the skin from its own. Survivors keep their built positions
@@ -433,12 +454,10 @@ void AdaptiveSph<Dim>::patch_lists(const std::vector<std::int32_t>& origin) {
   // positions: at any later time both have moved less than half the skin, so a pair within
   // max(r_i, r_j) then is in the list. The results are those of a new search, to the bit.
   const int n = p_.size(), n_old = nbrs_.n_particles();
-  const double skin = options_.neighbour_skin * options_.spacing;
   std::vector<std::int32_t> renumber(n_old, -1);
   std::vector<Vec<Dim>> built(n);
   std::vector<std::int32_t> born;
   std::vector<char> is_born(n, 0);
-  double max_reach = 0.0;
   for (int k = 0; k < n; ++k) {
     if (origin[k] >= 0) {
       renumber[origin[k]] = k, built[k] = built_at_[origin[k]];
@@ -446,22 +465,15 @@ void AdaptiveSph<Dim>::patch_lists(const std::vector<std::int32_t>& origin) {
       built[k] = p_.x[k], is_born[k] = 1;
       born.push_back(k);
     }
-    max_reach = std::max(max_reach, p_.radius[k] + skin);
   }
   // The new particles' pairs, each found once: from the new particle's side, or from the lower
   // index's when both are new.
-  CellGrid<Dim> grid;
-  grid.build(built, max_reach);
+  const CellGrid<Dim> grid = grid_of(built);
   std::vector<std::vector<std::int32_t>> partners(born.size());
 #pragma omp parallel for schedule(dynamic, 64)
-  for (int b = 0; b < static_cast<int>(born.size()); ++b) {
-    const int k = born[b];
-    grid.candidates(built[k], [&](int j) {
-      if (j == k || (is_born[j] && j < k)) return;
-      const double reach = std::max(p_.radius[k], p_.radius[j]) + skin;
-      if ((built[k] - built[j]).squaredNorm() < reach * reach) partners[b].push_back(j);
-    });
-  }
+  for (int b = 0; b < static_cast<int>(born.size()); ++b)
+    partners_of(
+        grid, built, born[b], [&](int j) { return is_born[j] && j < born[b]; }, partners[b]);
   // The rows are written into the spare lists, whose storage is kept between patches: fresh pages
   // for every patch cost more than the copy itself. Survivors keep their order (resampling compacts
   // in place), so a survivor's kept entries stay ascending and only the rows that gained a new
@@ -578,13 +590,9 @@ void AdaptiveSph<Dim>::refresh_in_place(const std::vector<std::int32_t>& movers)
   // lists are then exactly those a whole search at the built positions would give.
   const int n = p_.size(), n_movers = static_cast<int>(movers.size());
   LIQUID_VERIFY(n < (1 << 30), "sph: {} particles are too many for the refresh's edit keys (2 index + 1)", n);
-  const double skin = options_.neighbour_skin * options_.spacing;
   std::vector<char> is_mover(n, 0);
   for (std::int32_t k : movers) is_mover[k] = 1, built_at_[k] = p_.x[k];
-  double max_reach = 0.0;
-  for (int k = 0; k < n; ++k) max_reach = std::max(max_reach, p_.radius[k] + skin);
-  CellGrid<Dim> grid;
-  grid.build(built_at_, max_reach);
+  const CellGrid<Dim> grid = grid_of(built_at_);
   std::vector<std::vector<std::int32_t>> partners(n_movers);
   // Survivors' edits: (row, 2 mover + 1 if it leaves the row, + 0 if it enters it), so that sorting
   // puts each row's edits in the movers' order.
@@ -594,11 +602,8 @@ void AdaptiveSph<Dim>::refresh_in_place(const std::vector<std::int32_t>& movers)
   for (int m = 0; m < n_movers; ++m) {
     const int k = movers[m];
     std::vector<std::int32_t>& row = partners[m];
-    grid.candidates(built_at_[k], [&](int j) {
-      if (j == k) return;
-      const double reach = std::max(p_.radius[k], p_.radius[j]) + skin;
-      if ((built_at_[k] - built_at_[j]).squaredNorm() < reach * reach) row.push_back(j);
-    });
+    partners_of(
+        grid, built_at_, k, [](int) { return false; }, row);
     std::sort(row.begin(), row.end());
     const auto old = nbrs_.of(k);
     std::size_t a = 0, b = 0;

@@ -256,6 +256,13 @@ class AdaptiveSph {
   /// refresh_movers' work when the lists have room: only the movers' rows and the rows they enter or
   /// leave are rewritten (`movers` ascending, each moved half the skin).
   void refresh_in_place(const std::vector<std::int32_t>& movers);
+  /// The built positions binned in cells as wide as the largest reach (radius + skin).
+  CellGrid<Dim> grid_of(std::span<const Vec<Dim>> built) const;
+  /// Appends to `out` every j (not k, not skip(j)) within max(r_k, r_j) + skin of particle k, at the
+  /// built positions `grid` holds.
+  template <class Skip>
+  void partners_of(const CellGrid<Dim>& grid, std::span<const Vec<Dim>> built, int k, Skip skip,
+                   std::vector<std::int32_t>& out) const;
   /// The room a row of `size` entries is given to grow into when the lists are written whole.
   static std::int64_t row_room(std::int64_t size) { return 2 + size / 16; }
   void collide();

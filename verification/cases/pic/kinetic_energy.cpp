@@ -33,14 +33,14 @@
 // 2.1e-3, 2.1e-3), but FLIP 4.3e-3 and APIC 1.1e-2 in 3D at level 4 (volume: 6.2e-4 and 4.9e-3;
 // at level 5, outside this case, 5.4e-4 and 1.2e-3 against 6.6e-4 and 3.2e-3): not a cure, since the
 // volume-projected kick does work against the particles that has no sign.
-// Every rise other than the mass projection's PIC and APIC is warned about and gated. With reseeding, PIC and APIC do not rise above their earlier peak by more than 5e-3
-// (asserted); every rise over 5e-3 is warned about, and gated. RBF keeps more energy than PIC (the paper's
-// Fig. 10), compared by the total energy E at the end: K at one instant is the phase of the slosh as much as
-// what is kept (full tier, level 7: K at 2 s 0.092 for adaptive RBF against PIC's 0.110, E 0.749 against
-// 0.577). How often the projection itself raised the kinetic energy of the face velocities
-// (PicStepReport::grid_energy_before/after) is reported: an orthogonal projection (the uniform grid's D G)
-// never does (asserted for the uniform runs, to 1e-6). Gated: the energy left at the end, the peak of K and
-// the largest rise of E per method.
+// Every rise other than the mass projection's PIC and APIC is warned about and gated. With reseeding, PIC and
+// APIC do not rise above their earlier peak by more than 5e-3 (asserted); every rise over 5e-3 is warned
+// about, and gated. RBF keeps more energy than PIC (the paper's Fig. 10), compared by the total energy E at
+// the end: K at one instant is the phase of the slosh as much as what is kept (full tier, level 7: K at 2 s
+// 0.092 for adaptive RBF against PIC's 0.110, E 0.749 against 0.577). How often the projection itself raised
+// the kinetic energy of the face velocities (PicStepReport::grid_energy_before/after) is reported: an
+// orthogonal projection (the uniform grid's D G) never does (asserted for the uniform runs, to 1e-6). Gated:
+// the energy left at the end, the peak of K and the largest rise of E per method.
 
 #include <cmath>
 
