@@ -387,11 +387,11 @@ void AdaptivePic<Dim>::to_faces(PicStepReport& r) {
   else
     r.p2g = particles_to_faces<Dim>(graph_, particles_, bins_, options_.rbf, faces);
   r.unknown_faces = r.p2g.empty;
+  // The transfer's masses are unit particle masses times weights: a full cell's seeded particles
+  // (2^Dim) weigh 2^Dim on each of its faces. Kept for every regular transfer (pressure_work).
+  if (lattice_ || options_.projection != PicProjection::volume) face_mass_ = std::move(faces.weight);
   if (options_.projection != PicProjection::volume) {
-    // The transfer's masses are unit particle masses times weights: a full cell's seeded particles
-    // (2^Dim) weigh 2^Dim on each of its faces.
     const double full = static_cast<double>(1 << Dim);
-    face_mass_ = std::move(faces.weight);
     face_beta_.resize(face_mass_.size());
     for (std::size_t f = 0; f < face_mass_.size(); ++f)
       face_beta_[f] = full / std::max(face_mass_[f], options_.min_face_mass * full);
@@ -438,7 +438,7 @@ void AdaptivePic<Dim>::project_gravity(double dt, PicStepReport& r) {
   PicStepReport gravity;
   solve_pressure(gravity);
   r.ppe_gravity = gravity.ppe;
-  project(dt);
+  project(dt);  // keeps the pressure's normal derivative in gravity_gradient_
   volume_pass_ = false;
   gravity_pressure_ = p_;
   p_ = before;
@@ -637,9 +637,16 @@ void AdaptivePic<Dim>::solve_pressure(PicStepReport& r) {
 }
 
 template <int Dim>
-void AdaptivePic<Dim>::project(double dt) {
+double AdaptivePic<Dim>::project(double dt) {
   std::vector<double> dn = mac::face_normal_derivative<Dim>(graph_, system_, options_.poisson, system_.b);
   if (surface_) interface_gradients(dt, dn);
+  // The mass and split projections keep the transferred value of faces that hold mass (see below).
+  const bool keep_massed = options_.projection != PicProjection::volume && !face_mass_.empty();
+  if (volume_pass_) gravity_gradient_.assign(u_.size(), 0.0);
+  // pressure_work: what the pressure applied in volumes does in the transferred masses.
+  const bool in_volumes = options_.projection == PicProjection::volume;
+  const bool has_masses = face_mass_.size() == u_.size();
+  double work = has_masses ? 0.0 : std::numeric_limits<double>::quiet_NaN();
   graph_.for_each_face([&](FaceId f) {
     const GraphFace& g = graph_.face(f);
     if (g.is_boundary() || cls_.solid_face(g)) {
@@ -652,10 +659,16 @@ void AdaptivePic<Dim>::project(double dt) {
     // transferred value (with gravity) of every other face that holds mass: p = 0 on both its sides,
     // and extrapolated values there raised the particles' energy (see PicProjection).
     const bool wet = surface_ ? std::isfinite(dn[f]) : cls_.wet(g);
-    if (!volume_pass_) known_[f] = wet || (!face_mass_.empty() && face_mass_[f] > 0.0);
+    if (!volume_pass_) known_[f] = wet || (keep_massed && face_mass_[f] > 0.0);
     if (wet) u_[f] -= dt * (face_beta_.empty() || volume_pass_ ? 1.0 : face_beta_[f]) * dn[f];
+    if (volume_pass_ && wet) gravity_gradient_[f] = dn[f];
+    if (!has_masses || volume_pass_) return;
+    if (in_volumes && wet) work -= dt * face_mass_[f] * u_[f] * dn[f];
+    if (options_.projection == PicProjection::split)
+      work -= dt * face_mass_[f] * u_[f] * gravity_gradient_[f];
   });
   check_faces("project");
+  return volume_pass_ ? std::numeric_limits<double>::quiet_NaN() : work;
 }
 
 template <int Dim>
@@ -802,7 +815,7 @@ PicStepReport AdaptivePic<Dim>::advance(double dt) {
     });
     phase("project", [&] {
       r.grid_energy_before = grid_energy();
-      project(dt);
+      r.pressure_work = project(dt);
       r.grid_energy_after = grid_energy();
     });
     phase("extrapolate", [&] { extrapolate(); });
