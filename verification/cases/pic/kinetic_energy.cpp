@@ -275,7 +275,9 @@ CaseResult run(const CaseOptions& options) {
       // 1.7e-4), so APIC and FLIP are reported, and warned about over 1e-9. Counting the affine
       // part where C was fitted, and a forward-Euler fall, leave part of it (level 6, split: 7e-6;
       // level 5, mass, CFL 0.5: 2.8e-4 of 2.9e-4): a source in APIC's steps not yet traced (suspect: the
-      // stencils clamped within half a cell of a wall, whose first moment does not vanish).
+      // stencils clamped within half a cell of a wall, whose first moment does not vanish; a disk
+      // spinning in zero gravity away from the walls never exceeds W once the affine part is counted
+      // where C was fitted).
       if (m.transfer == PicTransfer::pic)
         result.expect(r.beyond_work <= 1e-9,
                       fmt::format("{}: a step raised E by {:.2e} E(0) more than the pressure's work in the "
