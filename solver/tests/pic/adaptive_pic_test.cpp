@@ -487,10 +487,11 @@ TEST(AdaptivePic, ThePressuresWorkInMassesBoundsEachStepsRiseOfEnergy) {
   EXPECT_EQ(mass.least_work, 0.0);
   EXPECT_EQ(mass.most_work, 0.0);
   EXPECT_LE(mass.beyond, 1e-9 * mass.e0) << "a PIC step raised E under the mass projection";
-  // APIC's steps are not bounded by W in general (its affine energy moves with the particle; level
-  // 6 exceeds W by 2.8e-5 E(0)), but at level 5 its split rise is W's: the steps that raised E (by
-  // up to 3.6e-4 E(0)) stayed below W by at least 3.8e-5 (measured). Without the gravity pass's
-  // term in W, or with its sign turned, this fails.
+  // APIC's steps are not bounded by W in general (its affine energy is counted at the particle's
+  // new position, and the mass pass is orthogonal in floored masses; level 6 exceeds W by 2.8e-5
+  // E(0)), but at level 5 its split rise is W's: the steps that raised E (by up to 3.6e-4 E(0))
+  // stayed below W by at least 3.8e-5 (measured). Without the gravity pass's term in W, or with
+  // its sign turned, this fails.
   const WorkBudget apic = work_budget(PicTransfer::apic, PicProjection::split);
   EXPECT_LE(apic.beyond, 1e-9 * apic.e0)
       << "an APIC step raised E by more than the pressure's work in masses";

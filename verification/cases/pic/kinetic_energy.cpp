@@ -263,21 +263,19 @@ CaseResult run(const CaseOptions& options) {
       // The budget of a step. With u = a - dt pi, a = w + dt g (w transferred) and pi the whole
       // pressure's acceleration, of which the part grad p applied in volumes does the work
       // W = -dt <u, grad p>_m in the masses m_f, the faces' energy obeys
-      // K_m(u) - W <= K_m(a) - dt^2 |pi|_m^2 / 2 (the mass pass is orthogonal in m), and with a
-      // forward-Euler fall, dt sum m_f u_f . g, the step changes E by at most
-      // W - dt^2 |g - pi|_m^2 / 2 plus the transfers' losses, provided every face that holds mass
-      // carries a - dt pi (the volume projection extrapolates massed faces between two air cells).
-      // PIC's transfers are averages, and no PIC step exceeded W in any run measured (levels 5-6,
-      // CFL 0.25-1, face-mass floors 0.01-0.1, all three projections; the particles fall by RK2,
-      // not forward Euler): asserted. APIC's energy counts its affine part with the stencil's second
-      // moments at the particle's position, which change as it moves with C fixed; APIC steps did
-      // exceed W (2D level 6, split: 2.8e-5 E(0) in one step; at CFL 0.5 even the mass projection:
-      // 1.7e-4), so APIC and FLIP are reported, and warned about over 1e-9. Counting the affine
-      // part where C was fitted, and a forward-Euler fall, leave part of it (level 6, split: 7e-6;
-      // level 5, mass, CFL 0.5: 2.8e-4 of 2.9e-4): a source in APIC's steps not yet traced (suspect: the
-      // stencils clamped within half a cell of a wall, whose first moment does not vanish; a disk
-      // spinning in zero gravity away from the walls never exceeds W once the affine part is counted
-      // where C was fitted).
+      // K_m(u) - W <= K_m(a) - dt^2 |pi|_m^2 / 2 (the mass pass is orthogonal in m, the floor of
+      // min_face_mass aside), and with a forward-Euler fall, dt sum m_f u_f . g, the step changes E
+      // by at most W - dt^2 |g - pi|_m^2 / 2 plus the transfers' losses, provided every face that
+      // holds mass carries a - dt pi (the volume projection extrapolates massed faces between two
+      // air cells). PIC's transfers are averages, and no PIC step exceeded W in any run measured
+      // (levels 5-6, CFL 0.25-1, face-mass floors 0.01-0.1, all three projections; the particles
+      // fall by RK2, not forward Euler): asserted. APIC's energy counts its affine part with the
+      // stencil's second moments at the particle's position, which change as it moves with C fixed;
+      // APIC steps did exceed W (2D level 6, split: 2.8e-5 E(0) in one step; at CFL 0.5 even the
+      // mass projection: 1.7e-4), so APIC and FLIP are reported, and warned about over 1e-9.
+      // Measured with drivers: with the affine part counted where C was fitted and the face-mass
+      // floor at 0.01 instead of 0.1 (the mass pass is orthogonal in the floored masses, not the
+      // particles'), no APIC step exceeded W.
       if (m.transfer == PicTransfer::pic)
         result.expect(r.beyond_work <= 1e-9,
                       fmt::format("{}: a step raised E by {:.2e} E(0) more than the pressure's work in the "
