@@ -73,9 +73,9 @@ PicSurface parse_pic_surface(const std::string& name);
 /// still pool stays still (2D level 6, 2 s: 4e-11 sqrt(gH)), and on the fixed-mass dam break
 /// (2D level 6, 2 s) the largest rise of E is PIC 0, FLIP 0, APIC 1.5e-4 E(0), against 1.4e-3,
 /// 2.1e-3 and 2.1e-3 with the volume projection. Not exactly 0 for APIC: the volume-projected kick
-/// does work -dt sum (m_f - rho V_f) u_f d_f p_g against the particles, which has no sign
-/// (PicStepReport::pressure_work); no PIC step raised the particles' energy by more than that
-/// work (kinetic-energy asserts it; APIC's steps exceeded it by up to 2.8e-5 E(0)).
+/// does work against the particles, -dt sum (m_f - rho V_f) u_f d_f p_g with the air-cell surface,
+/// which has no sign. Each step reports it (PicStepReport::pressure_work); it bounds every PIC
+/// step's rise of E (kinetic-energy).
 enum class PicProjection { volume, mass, split };
 const char* to_string(PicProjection projection);
 /// "volume", "mass", "split"; throws naming the choices.
@@ -186,11 +186,11 @@ struct PicStepReport {
   /// unit per particle: a full cell's seeded particles weigh 2^Dim on each of its faces), u_f after
   /// the projection and d_f p the normal derivative of the pressure that projection applied in
   /// volumes (projection volume: the whole pressure; split: the gravity pass's; mass: none, so 0).
-  /// On a divergence-free field it would be 0 if every face weighed the same; it is the energy the
-  /// pressure can give the particles where their masses do not follow the cells' volumes.
-  /// Measured on the fixed-mass dam break (kinetic-energy): no PIC step raised the particles'
-  /// energy by more than this (APIC's by up to 2.8e-5 E(0) more). Regular transfers only (their
-  /// face masses); NaN with the RBF transfers.
+  /// On a divergence-free field (air-cell surface) it would be 0 if every face weighed the same; it is the
+  /// energy the pressure can give the particles where their masses do not follow the cells' volumes. No PIC
+  /// step of the fixed-mass dam break raised the particles' energy by more than this (kinetic-energy asserts
+  /// it; APIC's exceed it as their energy is counted: README). Regular transfers only (their face masses);
+  /// NaN with the RBF transfers.
   double pressure_work = std::numeric_limits<double>::quiet_NaN();
   AdvectReport advect;
   ReseedReport reseed;
@@ -265,8 +265,8 @@ class AdaptivePic {
   void forces(double dt);
   void assemble(double dt);
   void solve_pressure(PicStepReport& r);
-  /// Applies the solved pressure; returns PicStepReport::pressure_work (the mass pass's and the
-  /// gravity pass's of the split projection: NaN; see project_gravity and advance).
+  /// Applies the solved pressure; returns PicStepReport::pressure_work (NaN from the split
+  /// projection's gravity pass, whose work advance() takes from the mass pass's return).
   double project(double dt);
   /// PicProjection::split's first pass (see there).
   void project_gravity(double dt, PicStepReport& r);

@@ -484,6 +484,7 @@ TEST(AdaptivePic, ThePressuresWorkInMassesBoundsEachStepsRiseOfEnergy) {
   EXPECT_LT(split.least_work, -1e-4 * split.e0) << "W was never negative: the bound was not put to the test";
   const WorkBudget mass = work_budget(PicTransfer::pic, PicProjection::mass);
   EXPECT_TRUE(mass.finite);
+  // Exactly 0: the mass projection applies no pressure in volumes, so no face adds to W.
   EXPECT_EQ(mass.least_work, 0.0);
   EXPECT_EQ(mass.most_work, 0.0);
   EXPECT_LE(mass.beyond, 1e-9 * mass.e0) << "a PIC step raised E under the mass projection";
