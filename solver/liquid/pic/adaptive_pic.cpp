@@ -91,7 +91,8 @@ CellGraph<Dim> initial_graph(const PicOptions<Dim>& o) {
   LIQUID_VERIFY(o.surface_radius > 0.0 && o.surface_radius < 2.0,
                 "PIC: surface radius {} (finest cells) is outside (0, 2)", o.surface_radius);
   LIQUID_VERIFY(o.projection == PicProjection::volume || o.transfer != PicTransfer::rbf,
-                "PIC: the mass projection needs a regular transfer (pic, flip or apic) on a uniform tree");
+                "PIC: the {} projection needs a regular transfer (pic, flip or apic) on a uniform tree",
+                to_string(o.projection));
   LIQUID_VERIFY(o.min_face_mass > 0.0 && o.min_face_mass <= 1.0, "PIC: min_face_mass {} is outside (0, 1]",
                 o.min_face_mass);
   return tree::uniform<Dim>(o.domain, o.adaptive ? o.coarse_level : o.fine_level, graph_options(o));
@@ -388,8 +389,9 @@ void AdaptivePic<Dim>::to_faces(PicStepReport& r) {
     r.p2g = particles_to_faces<Dim>(graph_, particles_, bins_, options_.rbf, faces);
   r.unknown_faces = r.p2g.empty;
   // The transfer's masses are unit particle masses times weights: a full cell's seeded particles
-  // (2^Dim) weigh 2^Dim on each of its faces. Kept for every regular transfer (pressure_work).
-  if (lattice_ || options_.projection != PicProjection::volume) face_mass_ = std::move(faces.weight);
+  // (2^Dim) weigh 2^Dim on each of its faces. Kept for every regular transfer (pressure_work; the
+  // mass and split projections need one, see the options' check).
+  if (lattice_) face_mass_ = std::move(faces.weight);
   if (options_.projection != PicProjection::volume) {
     const double full = static_cast<double>(1 << Dim);
     face_beta_.resize(face_mass_.size());

@@ -207,6 +207,13 @@ TEST(AdaptivePic, BadOptionsAndFailuresAreReported) {
   o = {};
   o.projection = PicProjection::mass;  // the adaptive RBF transfer has no face masses
   EXPECT_THROW(AdaptivePic<2>{o}, Error);
+  o.projection = PicProjection::split;  // neither: refused, naming the projection chosen
+  try {
+    AdaptivePic<2> refused(o);
+    ADD_FAILURE() << "the split projection with the RBF transfer must be refused";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("split projection"), std::string::npos) << e.what();
+  }
   o.adaptive = false, o.transfer = PicTransfer::pic, o.min_face_mass = 0.0;
   EXPECT_THROW(AdaptivePic<2>{o}, Error);
   for (auto bad : {+[](PicOptions<2>& b) { b.band = -1; }, +[](PicOptions<2>& b) { b.max_jump = 0; },

@@ -256,14 +256,13 @@ CaseResult run(const CaseOptions& options) {
       result.expect(r.projection.largest <= 1e-6,
                     fmt::format("{}: a projection raised the faces' kinetic energy in its own norm by {:.2e}",
                                 key, r.projection.largest));
+      const std::string rose =
+          fmt::format("{}: the total energy rose by {:.2e} E(0) from t = {:.2f} to {:.2f} s", key, r.rise,
+                      r.rise_from, r.rise_to);
       if (projection == PicProjection::mass && m.transfer != PicTransfer::flip)
-        result.expect(r.rise <= 1e-9,
-                      fmt::format("{}: the total energy rose by {:.2e} E(0) from t = {:.2f} to {:.2f} s", key,
-                                  r.rise, r.rise_from, r.rise_to));
+        result.expect(r.rise <= 1e-9, rose);
       else if (r.rise > 1e-6)
-        result.warnings.push_back(
-            fmt::format("{}: the total energy rose by {:.2e} E(0) from t = {:.2f} to {:.2f} s", key, r.rise,
-                        r.rise_from, r.rise_to));
+        result.warnings.push_back(rose);
       // The budget of a step. With u = a - dt pi, a = w + dt g (w transferred) and pi the whole
       // pressure's acceleration, of which the part grad p applied in volumes does the work
       // W = -dt <u, grad p>_m in the masses m_f, the faces' energy is
@@ -275,15 +274,13 @@ CaseResult run(const CaseOptions& options) {
       // measured (the particles fall by RK2, not forward Euler; see the README): asserted. APIC's
       // steps did, as its energy is counted (the affine part at the particle's new position) and
       // with the floor; they are reported, and warned about over 1e-9, as FLIP's are.
+      const std::string beyond = fmt::format(
+          "{}: a step raised E by {:.2e} E(0) more than the pressure's work in the particles' masses", key,
+          r.beyond_work);
       if (m.transfer == PicTransfer::pic)
-        result.expect(r.beyond_work <= 1e-9,
-                      fmt::format("{}: a step raised E by {:.2e} E(0) more than the pressure's work in the "
-                                  "particles' masses",
-                                  key, r.beyond_work));
+        result.expect(r.beyond_work <= 1e-9, beyond);
       else if (r.beyond_work > 1e-9)
-        result.warnings.push_back(fmt::format(
-            "{}: a step raised E by {:.2e} E(0) more than the pressure's work in the particles' masses", key,
-            r.beyond_work));
+        result.warnings.push_back(beyond);
     }
   }
   const Run &rbf = finest["adaptive-rbf"], &pic = finest["regular-pic"];

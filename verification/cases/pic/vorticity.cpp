@@ -278,6 +278,16 @@ CaseResult run(const CaseOptions& options) {
                      fmt::format("{} of {}", r.projection.raised, r.steps), r.projection.largest});
       zones.add_row({std::string(m.name), long(level), h, r.at[2].error_inside, r.at[2].error_outside,
                      r.at[2].rms_inside, r.at[2].rms_outside});
+      // The zones split the same samples: their larger L-inf error is the whole one, and an RMS of
+      // the Euclidean norm is at most sqrt(Dim) times the largest component's error.
+      const Checkpoint& c = r.at[2];
+      result.expect(
+          std::max(c.error_inside, c.error_outside) == c.error &&
+              c.rms_inside <= std::sqrt(double(Dim)) * c.error_inside &&
+              c.rms_outside <= std::sqrt(double(Dim)) * c.error_outside,
+          fmt::format("{} L{}: the zones' errors ({:.3g}, {:.3g}; RMS {:.3g}, {:.3g}) do not make up "
+                      "the whole one ({:.3g})",
+                      m.name, level, c.error_inside, c.error_outside, c.rms_inside, c.rms_outside, c.error));
       const std::string key = fmt::format("{} L{}", m.name, level);
       result.gate.push_back(
           {key + " KE lost at 4T", GateFigure::Kind::error, std::max(1.0 - r.at[2].energy, 1e-6)});
