@@ -1,31 +1,58 @@
 #include "liquid/rbf/interpolant.hpp"
 
+#include <cmath>
+#include <optional>
+
 #include "liquid/core/error.hpp"
 #include "liquid/rbf/saddle.hpp"
 
 namespace liquid::rbf {
 
 template <int Dim>
+struct Interpolant<Dim>::Factors {
+  std::vector<Vec<Dim>> nodes;  // scaled to the unit ball around centre
+  Vec<Dim> centre = Vec<Dim>::Zero();
+  double radius = 1.0;
+  Status status;
+  std::optional<detail::SaddleSystem<Dim>> system;
+};
+
+template <int Dim>
+std::shared_ptr<const typename Interpolant<Dim>::Factors> Interpolant<Dim>::factorise(
+    std::span<const Vec<Dim>> nodes, const Config& config) {
+  auto f = std::make_shared<Factors>();
+  f->nodes.assign(nodes.begin(), nodes.end());
+  const int n = static_cast<int>(f->nodes.size());
+  f->status.n_nodes = n;
+  f->status.degree_requested = config.degree;
+  if (n == 0) {
+    f->status.info = Info::empty_stencil;
+    return f;
+  }
+  for (const auto& x : f->nodes) f->centre += x;
+  f->centre /= n;
+  f->radius = 0.0;
+  for (const auto& x : f->nodes) f->radius = std::max(f->radius, (x - f->centre).norm());
+  if (!std::isfinite(f->radius)) {
+    f->status.info = Info::non_finite;
+    return f;
+  }
+  if (f->radius == 0.0) f->radius = 1.0;  // a single node: a constant interpolant
+  for (auto& x : f->nodes) x = (x - f->centre) / f->radius;
+  f->system.emplace(f->nodes, config);
+  f->status = f->system->status;
+  return f;
+}
+
+template <int Dim>
 Interpolant<Dim>::Interpolant(std::span<const Vec<Dim>> nodes, const Config& config)
-    : nodes_(nodes.begin(), nodes.end()), centre_(Vec<Dim>::Zero()) {
-  status_.n_nodes = n_nodes();
-  status_.degree_requested = config.degree;
-  if (nodes_.empty()) {
-    status_.info = Info::empty_stencil;
-    return;
-  }
-  for (const auto& x : nodes_) centre_ += x;
-  centre_ /= n_nodes();
-  radius_ = 0.0;
-  for (const auto& x : nodes_) radius_ = std::max(radius_, (x - centre_).norm());
-  if (!std::isfinite(radius_)) {
-    status_.info = Info::non_finite;
-    return;
-  }
-  if (radius_ == 0.0) radius_ = 1.0;  // a single node: a constant interpolant
-  for (auto& x : nodes_) x = (x - centre_) / radius_;
-  system_ = std::make_unique<detail::SaddleSystem<Dim>>(nodes_, config);
-  status_ = system_->status;
+    : factors_(factorise(nodes, config)) {}
+
+template <int Dim>
+Interpolant<Dim>::Interpolant(std::shared_ptr<const Factors> factors, const Vec<Dim>& origin, double scale)
+    : factors_(std::move(factors)), origin_(origin), scale_(scale) {
+  LIQUID_VERIFY(factors_ != nullptr, "RBF interpolant given no factors");
+  LIQUID_VERIFY(scale > 0.0 && std::isfinite(scale), "RBF interpolant scale {} is not positive", scale);
 }
 
 template <int Dim>
@@ -36,24 +63,48 @@ template <int Dim>
 Interpolant<Dim>& Interpolant<Dim>::operator=(Interpolant&&) noexcept = default;
 
 template <int Dim>
+const Status& Interpolant<Dim>::status() const {
+  return factors_->status;
+}
+
+template <int Dim>
+int Interpolant<Dim>::n_nodes() const {
+  return static_cast<int>(factors_->nodes.size());
+}
+
+template <int Dim>
+Vec<Dim> Interpolant<Dim>::unit(const Vec<Dim>& x) const {
+  return ((x - origin_) / scale_ - factors_->centre) / factors_->radius;
+}
+
+template <int Dim>
 void Interpolant<Dim>::fit(const Eigen::MatrixXd& values) {
-  LIQUID_VERIFY(status_.usable(), "RBF interpolant unusable: {}", status_.describe());
+  LIQUID_VERIFY(status().usable(), "RBF interpolant unusable: {}", status().describe());
   LIQUID_VERIFY(values.rows() == n_nodes(), "RBF interpolant has {} nodes but {} value rows were given",
                 n_nodes(), values.rows());
   LIQUID_VERIFY(values.allFinite(), "RBF interpolant given non-finite values");
-  Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(n_nodes() + system_->n_terms, values.cols());
+  const int size = n_nodes() + factors_->system->n_terms;
+  if (values.cols() == 1) {  // a vector right-hand side takes Eigen's vector kernels, not GEMM's
+    Eigen::VectorXd rhs = Eigen::VectorXd::Zero(size);
+    rhs.head(n_nodes()) = values.col(0);
+    coefficients_ = factors_->system->solve(rhs);
+    return;
+  }
+  Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(size, values.cols());
   rhs.topRows(n_nodes()) = values;
-  coefficients_ = system_->solve(rhs);
+  coefficients_ = factors_->system->solve(rhs);
 }
 
 template <int Dim>
 Eigen::RowVectorXd Interpolant<Dim>::value(const Vec<Dim>& x) const {
   LIQUID_VERIFY(coefficients_.size() > 0, "RBF interpolant evaluated before fit()");
-  const Vec<Dim> z = (x - centre_) / radius_;
+  const Vec<Dim> z = unit(x);
   const int n = n_nodes();
+  const auto& system = *factors_->system;
   Eigen::RowVectorXd out = Eigen::RowVectorXd::Zero(coefficients_.cols());
-  for (int j = 0; j < n; ++j) out += system_->kernel.value((z - nodes_[j]).norm()) * coefficients_.row(j);
-  for (int t = 0; t < system_->n_terms; ++t) out += system_->basis.value(t, z) * coefficients_.row(n + t);
+  for (int j = 0; j < n; ++j)
+    out += system.kernel.value((z - factors_->nodes[j]).norm()) * coefficients_.row(j);
+  for (int t = 0; t < system.n_terms; ++t) out += system.basis.value(t, z) * coefficients_.row(n + t);
   return out;
 }
 
@@ -61,28 +112,31 @@ template <int Dim>
 double Interpolant<Dim>::value_at(const Vec<Dim>& x, int column) const {
   LIQUID_VERIFY(coefficients_.size() > 0, "RBF interpolant evaluated before fit()");
   LIQUID_VERIFY(column >= 0 && column < coefficients_.cols(), "RBF interpolant has no field {}", column);
-  const Vec<Dim> z = (x - centre_) / radius_;
+  const Vec<Dim> z = unit(x);
   const int n = n_nodes();
+  const auto& system = *factors_->system;
   double out = 0.0;
-  for (int j = 0; j < n; ++j) out += system_->kernel.value((z - nodes_[j]).norm()) * coefficients_(j, column);
-  for (int t = 0; t < system_->n_terms; ++t) out += system_->basis.value(t, z) * coefficients_(n + t, column);
+  for (int j = 0; j < n; ++j)
+    out += system.kernel.value((z - factors_->nodes[j]).norm()) * coefficients_(j, column);
+  for (int t = 0; t < system.n_terms; ++t) out += system.basis.value(t, z) * coefficients_(n + t, column);
   return out;
 }
 
 template <int Dim>
 Eigen::MatrixXd Interpolant<Dim>::gradient(const Vec<Dim>& x) const {
   LIQUID_VERIFY(coefficients_.size() > 0, "RBF interpolant evaluated before fit()");
-  const Vec<Dim> z = (x - centre_) / radius_;
+  const Vec<Dim> z = unit(x);
   const int n = n_nodes();
+  const auto& system = *factors_->system;
   Eigen::MatrixXd out = Eigen::MatrixXd::Zero(Dim, coefficients_.cols());
   for (int j = 0; j < n; ++j) {
-    const Vec<Dim> d = z - nodes_[j];
-    const double g = system_->kernel.gradient_factor(d.norm());
+    const Vec<Dim> d = z - factors_->nodes[j];
+    const double g = system.kernel.gradient_factor(d.norm());
     for (int k = 0; k < Dim; ++k) out.row(k) += g * d[k] * coefficients_.row(j);
   }
-  for (int t = 0; t < system_->n_terms; ++t)
-    for (int k = 0; k < Dim; ++k) out.row(k) += system_->basis.derivative(t, k, z) * coefficients_.row(n + t);
-  return out / radius_;
+  for (int t = 0; t < system.n_terms; ++t)
+    for (int k = 0; k < Dim; ++k) out.row(k) += system.basis.derivative(t, k, z) * coefficients_.row(n + t);
+  return out / (factors_->radius * scale_);
 }
 
 template class Interpolant<2>;

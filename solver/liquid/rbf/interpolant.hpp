@@ -21,14 +21,22 @@ struct SaddleSystem;
 template <int Dim>
 class Interpolant {
  public:
+  /// A node set translated to its centroid, scaled to the unit ball and factorised: what the
+  /// interpolants of congruent stencils share (InterpolantCache).
+  struct Factors;
+  static std::shared_ptr<const Factors> factorise(std::span<const Vec<Dim>> nodes, const Config& config);
+
   /// Factorises the system for `nodes` (copied). Check status().usable() before fitting.
   Interpolant(std::span<const Vec<Dim>> nodes, const Config& config);
+  /// An interpolant on shared factors whose nodes were given in units of `scale` from `origin`: a
+  /// point x is read as (x - origin) / scale.
+  Interpolant(std::shared_ptr<const Factors> factors, const Vec<Dim>& origin, double scale);
   ~Interpolant();
   Interpolant(Interpolant&&) noexcept;
   Interpolant& operator=(Interpolant&&) noexcept;
 
-  const Status& status() const { return status_; }
-  int n_nodes() const { return static_cast<int>(nodes_.size()); }
+  const Status& status() const;
+  int n_nodes() const;
 
   /// Fits the interpolant to `values` (one row per node, one column per field). Throws when the
   /// status is not usable or the row count differs from the node count.
@@ -42,11 +50,11 @@ class Interpolant {
   Eigen::MatrixXd gradient(const Vec<Dim>& x) const;
 
  private:
-  std::vector<Vec<Dim>> nodes_;  // scaled to the unit ball around centre_
-  Vec<Dim> centre_;
-  double radius_ = 1.0;
-  Status status_;
-  std::unique_ptr<detail::SaddleSystem<Dim>> system_;
+  Vec<Dim> unit(const Vec<Dim>& x) const;  // x in the factors' unit-ball coordinates
+
+  std::shared_ptr<const Factors> factors_;
+  Vec<Dim> origin_ = Vec<Dim>::Zero();
+  double scale_ = 1.0;
   Eigen::MatrixXd coefficients_;  // (n + n_terms) x n_fields
 };
 

@@ -3,6 +3,7 @@
 // to the unit ball. Shared by the RBF-FD weights and the interpolant; internal to the rbf module.
 
 #include <span>
+#include <type_traits>
 
 #include <Eigen/Core>
 #include <Eigen/LU>
@@ -23,9 +24,11 @@ struct SaddleSystem {
   PolynomialBasis<Dim> basis;
   /// Solves K x = rhs with one step of iterative refinement, which brings the round-off of the
   /// high-order settings (s = 7, degree 4 on fine stencils) back to that of a pivoted QR.
+  /// A vector right-hand side stays a vector, so that both solves take Eigen's vector kernels.
   template <class Rhs>
-  Eigen::MatrixXd solve(const Rhs& rhs) const {
-    Eigen::MatrixXd x = lu.solve(rhs);
+  auto solve(const Rhs& rhs) const {
+    using X = std::conditional_t<Rhs::ColsAtCompileTime == 1, Eigen::VectorXd, Eigen::MatrixXd>;
+    X x = lu.solve(rhs);
     x += lu.solve(rhs - matrix * x);
     return x;
   }

@@ -1,25 +1,17 @@
 #pragma once
-// A cache of RBF-FD basis weights keyed by the stencil's geometry. Stencils on a tree repeat: every
-// T-junction of the same layout, at any level, has the same node offsets once they are divided by
-// the size h of the centre cell. The key is those offsets quantised to a power-of-two quantum
-// (dyadic cell centres land exactly on it) plus the kernel settings; the stored weights are for
-// h = 1 and are rescaled on the way out (1/h per derivative order).
-// An entry is computed from the key's own offsets, not from the stencil that happened to miss
-// first, so its weights do not depend on which thread got there first: assembly is reproducible
-// bit for bit at any thread count. Stencils whose offsets are not on the quantum to round-off
-// (cells of a box whose sides are not in power-of-two ratios) are computed directly, uncached.
-// Safe under OpenMP: lookups take a shared lock on one of many shards, a miss computes outside
-// any lock.
+// A cache of RBF-FD basis weights keyed by the stencil's geometry (shape_key.hpp): every T-junction
+// of the same layout, at any level, has the same node offsets once they are divided by the size h
+// of the centre cell. The stored weights are for h = 1 and are rescaled on the way out (1/h per
+// derivative order). An entry is computed from the key's own offsets, so assembly is reproducible
+// bit for bit at any thread count. Stencils whose offsets are not on the quantum to round-off are
+// computed directly, uncached. Safe under OpenMP.
 
 #include <atomic>
 #include <cstdint>
-#include <memory>
-#include <mutex>
-#include <shared_mutex>
 #include <span>
-#include <unordered_map>
 #include <vector>
 
+#include "liquid/rbf/shape_key.hpp"
 #include "liquid/rbf/weights.hpp"
 
 namespace liquid::rbf {
@@ -42,24 +34,8 @@ class WeightCache {
   void clear();
 
  private:
-  struct Key {
-    std::vector<std::int64_t> words;
-    bool operator==(const Key& o) const { return words == o.words; }
-  };
-  struct KeyHash {
-    std::size_t operator()(const Key& k) const;
-  };
-  struct Shard {
-    mutable std::shared_mutex mutex;
-    std::unordered_map<Key, std::shared_ptr<const BasisWeights<Dim>>, KeyHash> map;
-  };
-  static constexpr int n_shards = 64;
-
-  /// The key, or no key (empty words) when an offset is off the quantum by more than round-off.
-  Key make_key(std::span<const Vec<Dim>> nodes, const Vec<Dim>& at, double h, const Config& config) const;
-
   double quantum_;
-  std::unique_ptr<Shard[]> shards_;
+  ShapeMap<BasisWeights<Dim>> map_;
   std::atomic<long> hits_{0};
   std::atomic<long> misses_{0};
   std::atomic<long> bypassed_{0};

@@ -7,6 +7,7 @@
 #include <span>
 #include <vector>
 
+#include "liquid/rbf/interpolant_cache.hpp"
 #include "liquid/tree/cell_graph.hpp"
 
 namespace liquid::transfer {
@@ -24,5 +25,13 @@ struct FaceStencil {
 template <int Dim>
 void gather_face_stencil(const CellGraph<Dim>& graph, CellId c, int rings, std::span<const double> u,
                          std::span<const std::uint8_t> known, FaceStencil<Dim>& out);
+
+/// The RBF interpolant of `nodes` (one axis of cell c's stencil) fitted to `values`: through
+/// `cache` when given (shared factors, the values taken in its node order), else factorised for
+/// these nodes alone. Left unfitted when its status is not usable.
+template <int Dim>
+rbf::Interpolant<Dim> fitted_interpolant(const CellGraph<Dim>& graph, CellId c,
+                                         std::span<const Vec<Dim>> nodes, std::span<const double> values,
+                                         const rbf::Config& config, rbf::InterpolantCache<Dim>* cache);
 
 }  // namespace liquid::transfer

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
 
 #include <fmt/format.h>
 
@@ -156,10 +157,36 @@ void gather_face_stencil(const CellGraph<Dim>& graph, CellId c, int rings, std::
   }
 }
 
+template <int Dim>
+rbf::Interpolant<Dim> fitted_interpolant(const CellGraph<Dim>& graph, CellId c,
+                                         std::span<const Vec<Dim>> nodes, std::span<const double> values,
+                                         const rbf::Config& config, rbf::InterpolantCache<Dim>* cache) {
+  const long n = static_cast<long>(values.size());
+  if (cache == nullptr) {
+    rbf::Interpolant<Dim> interp(nodes, config);
+    if (interp.status().usable()) interp.fit(Eigen::Map<const Eigen::VectorXd>(values.data(), n));
+    return interp;
+  }
+  thread_local std::vector<int> order;
+  rbf::Interpolant<Dim> interp =
+      cache->interpolant(nodes, graph.centre(c), graph.cell_size(c)[0], config, order);
+  if (!interp.status().usable()) return interp;
+  Eigen::VectorXd sorted(n);
+  for (long j = 0; j < n; ++j) sorted[j] = values[order[j]];
+  interp.fit(sorted);
+  return interp;
+}
+
 template void gather_face_stencil<2>(const CellGraph<2>&, CellId, int, std::span<const double>,
                                      std::span<const std::uint8_t>, FaceStencil<2>&);
 template void gather_face_stencil<3>(const CellGraph<3>&, CellId, int, std::span<const double>,
                                      std::span<const std::uint8_t>, FaceStencil<3>&);
+template rbf::Interpolant<2> fitted_interpolant<2>(const CellGraph<2>&, CellId, std::span<const Vec<2>>,
+                                                   std::span<const double>, const rbf::Config&,
+                                                   rbf::InterpolantCache<2>*);
+template rbf::Interpolant<3> fitted_interpolant<3>(const CellGraph<3>&, CellId, std::span<const Vec<3>>,
+                                                   std::span<const double>, const rbf::Config&,
+                                                   rbf::InterpolantCache<3>*);
 
 }  // namespace transfer
 
@@ -241,6 +268,8 @@ TransferReport faces_to_points(const CellGraph<Dim>& graph, std::span<const doub
   LIQUID_VERIFY(bins.n_particles() == static_cast<int>(x.size()) && v.size() == x.size(),
                 "faces_to_points: {} points, {} binned, {} outputs", x.size(), bins.n_particles(), v.size());
   const rbf::Config config{options.exponent, options.degree};
+  std::unique_ptr<rbf::InterpolantCache<Dim>> cache;
+  if (options.share_factors) cache = std::make_unique<rbf::InterpolantCache<Dim>>();
   // The cells that hold points, in id order.
   std::vector<CellId> cells;
   for (CellId c = 0; c + 1 < static_cast<CellId>(bins.begin.size()); ++c)
@@ -269,11 +298,11 @@ TransferReport faces_to_points(const CellGraph<Dim>& graph, std::span<const doub
             v[p][axis] = clamp_to(value, lo, hi, options.clamp, s.report);
           };
           if (options.scheme == Scheme::rbf) {
-            rbf::Interpolant<Dim> interp(nodes, config);
+            const rbf::Interpolant<Dim> interp =
+                transfer::fitted_interpolant<Dim>(graph, c, nodes, values, config, cache.get());
             if (interp.status().usable()) {
               if (interp.status().degree_used < options.degree) ++s.report.degree_reduced;
               s.report.max_degree_used = std::max(s.report.max_degree_used, interp.status().degree_used);
-              interp.fit(Eigen::Map<const Eigen::VectorXd>(values.data(), static_cast<long>(values.size())));
               for (std::int32_t p : pts) put(p, interp.value_at(x[p]));
               continue;
             }

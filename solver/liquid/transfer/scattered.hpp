@@ -53,6 +53,10 @@ struct TransferOptions {
   /// particle -> face phase took 0.74 s a step (3D, 8k particles) without the limit, 0.044 s with.
   /// Face -> particle keeps every face of its rings (limiting them cost accuracy, measured).
   int max_nodes = 0;
+  /// Face -> particle (RBF): factorise each stencil shape once and share it between the cells with
+  /// that layout of faces (rbf::InterpolantCache); false factorises every cell's own. The two agree
+  /// to round-off.
+  bool share_factors = true;
   int node_cap(int dim) const;  ///< the limit max_nodes stands for (0: none)
 
   /// The paper's transfer: PHS r^5 with polynomials of degree 2, the adjacent/incident cells (plus

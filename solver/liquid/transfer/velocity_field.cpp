@@ -30,6 +30,7 @@ FaceVelocityField<Dim>::FaceVelocityField(const CellGraph<Dim>& graph, std::span
                 "FaceVelocityField: {} face values for {} face ids", u.size(), graph.face_capacity());
   LIQUID_VERIFY(known.empty() || known.size() == u.size(), "FaceVelocityField: {} known flags for {} faces",
                 known.size(), u.size());
+  if (options.share_factors) cache_ = std::make_unique<rbf::InterpolantCache<Dim>>();
   std::vector<CellId> list(cells.begin(), cells.end());
   if (list.empty()) list = graph.cell_ids();
   slot_.assign(graph.cell_capacity(), -1);
@@ -75,10 +76,9 @@ void FaceVelocityField<Dim>::prepare(CellId c, CellInterpolants& out) const {
     out.lo[axis] = values.minCoeff();
     out.hi[axis] = values.maxCoeff();
     out.fallback[axis] = values.mean();
-    rbf::Interpolant<Dim> interp(nodes, config);
-    if (!interp.status().usable()) continue;
-    interp.fit(Eigen::MatrixXd(values));
-    out.interp[axis].emplace(std::move(interp));
+    rbf::Interpolant<Dim> interp =
+        transfer::fitted_interpolant<Dim>(*graph_, c, nodes, stencil.values[axis], config, cache_.get());
+    if (interp.status().usable()) out.interp[axis].emplace(std::move(interp));
   }
 }
 

@@ -14,6 +14,7 @@
 #include <span>
 #include <vector>
 
+#include "liquid/rbf/interpolant_cache.hpp"
 #include "liquid/transfer/regular.hpp"
 #include "liquid/transfer/scattered.hpp"
 #include "liquid/tree/cell_graph.hpp"
@@ -50,6 +51,7 @@ class FaceVelocityField {
   TransferOptions options_;
   std::vector<std::int32_t> slot_;  // per cell id: index into prepared_, or -1
   std::vector<std::unique_ptr<CellInterpolants>> prepared_;
+  std::unique_ptr<rbf::InterpolantCache<Dim>> cache_;  // shared factors (options.share_factors)
 };
 
 extern template class FaceVelocityField<2>;

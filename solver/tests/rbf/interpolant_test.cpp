@@ -1,10 +1,16 @@
-// The RBF interpolant: interpolation at the nodes, polynomial reproduction, gradients.
+// The RBF interpolant: interpolation at the nodes, polynomial reproduction, gradients; the cache of
+// shared factors: equal to a direct interpolant to round-off whatever the node order, one entry per
+// layout at any level and place, an entry that depends on its key alone, bypassed off the quantum.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <numeric>
+#include <random>
 
 #include "liquid/core/error.hpp"
 #include "liquid/rbf/interpolant.hpp"
+#include "liquid/rbf/interpolant_cache.hpp"
 #include "support/stencils.hpp"
 
 namespace liquid::rbf {
@@ -41,6 +47,92 @@ TEST(RbfInterpolant, ErrorsAreExplicit) {
   Interpolant<2> empty(std::vector<Vec<2>>{}, Config{});
   EXPECT_EQ(empty.status().info, Info::empty_stencil);
   EXPECT_THROW(empty.fit(Eigen::MatrixXd::Zero(0, 1)), Error);
+}
+
+// The same layout of nodes at three levels and two places, gathered in a shuffled order each time:
+// one factorisation, and every interpolant agrees with the one factorised for its own nodes.
+TEST(InterpolantCache, CongruentStencilsShareOneFactorisationAndMatchDirectInterpolants) {
+  const auto base = support::quadtree_stencil<2>(1, 1.0, 4u);
+  const auto field = [](const Vec<2>& x) { return std::sin(2.0 * x[0]) + x[0] * x[1]; };
+  InterpolantCache<2> cache;
+  std::mt19937 rng(3);
+  std::vector<int> order;
+  int calls = 0;
+  for (double h : {0.125, 0.0625, 0.03125}) {
+    for (const Vec<2>& at : {Vec<2>(0.5, 0.25), Vec<2>(-0.375, 0.75)}) {
+      std::vector<Vec<2>> nodes;
+      for (const auto& x : base) nodes.push_back(at + h * x);
+      std::shuffle(nodes.begin(), nodes.end(), rng);
+      Eigen::VectorXd values(nodes.size());
+      for (std::size_t j = 0; j < nodes.size(); ++j) values[j] = field(nodes[j]);
+
+      Interpolant<2> direct(nodes, Config{5, 2});
+      direct.fit(values);
+      Interpolant<2> shared = cache.interpolant(nodes, at, h, Config{5, 2}, order);
+      ASSERT_TRUE(shared.status().usable()) << shared.status().describe();
+      ASSERT_EQ(order.size(), nodes.size());
+      Eigen::VectorXd sorted(nodes.size());
+      for (std::size_t j = 0; j < nodes.size(); ++j) sorted[j] = values[order[j]];
+      shared.fit(sorted);
+      for (const Vec<2>& d : {Vec<2>(0.1, -0.2), Vec<2>(0.45, 0.3), Vec<2>(-0.5, -0.5)}) {
+        const Vec<2> x = at + h * d;
+        EXPECT_NEAR(shared.value_at(x), direct.value_at(x), 1e-12) << "h " << h;
+        EXPECT_NEAR((shared.gradient(x) - direct.gradient(x)).norm(), 0.0, 1e-9 / h) << "h " << h;
+      }
+      for (std::size_t j = 0; j < nodes.size(); ++j) EXPECT_NEAR(shared.value_at(nodes[j]), values[j], 1e-12);
+      ++calls;
+    }
+  }
+  EXPECT_EQ(cache.misses(), 1);
+  EXPECT_EQ(cache.hits(), calls - 1);
+  EXPECT_EQ(cache.size(), 1u);
+  // Other kernel settings are another entry.
+  cache.interpolant(base, Vec<2>::Zero(), 1.0, Config{3, 1}, order);
+  EXPECT_EQ(cache.misses(), 2);
+}
+
+// An entry is factorised from its key's offsets: the same layout met at places whose coordinates
+// round differently gives the same values whichever place is met first. Off the quantum (a cell
+// side a third of another) the nodes are factorised directly and nothing is stored; a full cache is
+// emptied and goes on.
+TEST(InterpolantCache, EntriesDependOnTheKeyAloneAndOffQuantumStencilsBypass) {
+  const auto base = support::quadtree_stencil<3>(1, 1.0, 7u);
+  const double h = 0.0625 * 3.141592653589793;
+  const Vec<3> here(0.1, 0.7, 0.3), there(1234.567, 89.01, -7.25);
+  const auto place = [&](const Vec<3>& at) {
+    std::vector<Vec<3>> nodes;
+    for (const auto& x : base) nodes.push_back(at + h * x);
+    return nodes;
+  };
+  const auto probe = [&](InterpolantCache<3>& cache, const Vec<3>& at) {
+    std::vector<int> order;
+    Interpolant<3> interp = cache.interpolant(place(at), at, h, Config{5, 2}, order);
+    Eigen::VectorXd v(base.size());
+    for (std::size_t j = 0; j < base.size(); ++j)
+      v[j] = std::cos(base[order[j]][0] + 2.0 * base[order[j]][2]);
+    interp.fit(v);
+    return interp.value_at(at + h * Vec<3>(0.2, -0.1, 0.3));
+  };
+  InterpolantCache<3> one, other;
+  const double a_first = probe(one, here), b_second = probe(one, there);
+  const double b_first = probe(other, there), a_second = probe(other, here);
+  EXPECT_EQ(one.hits(), 1);
+  EXPECT_EQ(a_first, a_second);
+  EXPECT_EQ(b_first, b_second);
+
+  std::vector<Vec<3>> thirds = base;
+  for (auto& x : thirds) x[1] /= 3.0;
+  InterpolantCache<3> cache(2);
+  std::vector<int> order;
+  EXPECT_TRUE(cache.interpolant(thirds, Vec<3>::Zero(), 1.0, Config{5, 2}, order).status().usable());
+  EXPECT_EQ(cache.bypassed(), 1);
+  EXPECT_EQ(cache.size(), 0u);
+  for (unsigned seed : {1u, 2u, 3u})
+    cache.interpolant(support::quadtree_stencil<3>(1, 1.0, seed), Vec<3>::Zero(), 1.0, Config{5, 2}, order);
+  EXPECT_EQ(cache.misses(), 3);
+  EXPECT_EQ(cache.flushes(), 1);
+  EXPECT_LE(cache.size(), 2u);
+  EXPECT_THROW(cache.interpolant(base, Vec<3>::Zero(), 0.0, Config{5, 2}, order), Error);
 }
 
 }  // namespace

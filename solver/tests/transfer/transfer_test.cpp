@@ -3,7 +3,7 @@
 // (particle -> face -> particle) on a uniform tree, and its face -> particle transfer keeps no more
 // energy than the faces hold; faces no particle reaches are reported and
 // extrapolated, never NaN; clamping acts and is counted; every transfer gives the same bits on 1
-// and on several threads.
+// and on several threads; face -> particle with shared factors agrees with per-cell factors.
 #include <gtest/gtest.h>
 #include <omp.h>
 
@@ -358,6 +358,40 @@ TYPED_TEST(TransferTest, SameBitsOnOneAndSeveralThreads) {
   EXPECT_EQ(one.v_mls, many.v_mls);
   EXPECT_EQ(one.v_apic, many.v_apic);
   EXPECT_EQ(one.c_apic, many.c_apic);
+}
+
+// Shared factors (one factorisation per stencil layout, the default) and each cell's own agree to
+// round-off on a non-graded tree with unknown faces, in faces_to_points and in the velocity field.
+TYPED_TEST(TransferTest, SharedFactorsAgreeWithEachCellsOwn) {
+  constexpr int Dim = TypeParam::value;
+  const auto g = random_tree<Dim>(33, 2);
+  const auto p = seeded<Dim>(g, 0.5);
+  CellBins bins;
+  bin_particles<Dim>(g, p.x, bins);
+  std::vector<double> u(g.face_capacity(), 0.0);
+  std::vector<std::uint8_t> known(g.face_capacity(), 0);
+  g.for_each_face([&](FaceId f) {
+    const Vec<Dim> x = g.face_centre(f);
+    u[f] = std::sin(3.0 * x[0] + x[Dim - 1]) * std::cos(2.0 * x[1]);
+    known[f] = x[0] + 0.5 * x[1] < 0.6;  // a band of unknown faces makes more layouts
+  });
+  TransferOptions shared = TransferOptions::paper_rbf(), own = shared;
+  own.share_factors = false;
+  std::vector<Vec<Dim>> a(p.size()), b(p.size());
+  const TransferReport ra = faces_to_points<Dim>(g, u, known, p.x, bins, shared, a);
+  const TransferReport rb = faces_to_points<Dim>(g, u, known, p.x, bins, own, b);
+  EXPECT_EQ(ra.fallback, rb.fallback);
+  EXPECT_EQ(ra.degree_reduced, rb.degree_reduced);
+  const FaceVelocityField<Dim> fa(g, u, known, shared), fb(g, u, known, own);
+  double worst = 0.0, worst_field = 0.0, largest = 0.0;
+  for (int i = 0; i < p.size(); ++i) {
+    worst = std::max(worst, (a[i] - b[i]).cwiseAbs().maxCoeff());
+    worst_field = std::max(worst_field, (fa(p.x[i]) - fb(p.x[i])).cwiseAbs().maxCoeff());
+    largest = std::max(largest, b[i].cwiseAbs().maxCoeff());
+  }
+  EXPECT_GT(largest, 0.5);
+  EXPECT_LT(worst, 1e-11);
+  EXPECT_LT(worst_field, 1e-11);
 }
 
 TYPED_TEST(TransferTest, AdvectionThroughFaceVelocitiesIsExactForLinearFields) {

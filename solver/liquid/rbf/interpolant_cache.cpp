@@ -1,0 +1,60 @@
+#include "liquid/rbf/interpolant_cache.hpp"
+
+#include <cmath>
+#include <numeric>
+
+#include "liquid/core/error.hpp"
+#include "liquid/rbf/weight_cache.hpp"
+
+namespace liquid::rbf {
+
+template <int Dim>
+InterpolantCache<Dim>::InterpolantCache(std::size_t max_entries, double quantum)
+    : max_entries_(max_entries), quantum_(quantum) {
+  LIQUID_VERIFY(max_entries > 0, "interpolant cache: max_entries must be positive");
+  LIQUID_VERIFY(quantum > 0.0 && quantum < 1.0, "interpolant cache quantum must be in (0, 1), got {}",
+                quantum);
+}
+
+template <int Dim>
+Interpolant<Dim> InterpolantCache<Dim>::interpolant(std::span<const Vec<Dim>> nodes, const Vec<Dim>& at,
+                                                    double h, const Config& config, std::vector<int>& order) {
+  LIQUID_VERIFY(h > 0.0 && std::isfinite(h), "interpolant cache needs a positive cell size, got {}", h);
+  bool finite = at.allFinite();
+  for (const auto& x : nodes) finite = finite && x.allFinite();
+  if (!finite) {  // the direct factorisation reports it
+    order.resize(nodes.size());
+    std::iota(order.begin(), order.end(), 0);
+    bypassed_.fetch_add(1, std::memory_order_relaxed);
+    return Interpolant<Dim>(nodes, config);
+  }
+  canonical_order<Dim>(nodes, at, h, order);
+  thread_local std::vector<Vec<Dim>> sorted;
+  sorted.resize(nodes.size());
+  for (std::size_t j = 0; j < nodes.size(); ++j) sorted[j] = nodes[order[j]];
+  const ShapeKey key = shape_key<Dim>(sorted, at, h, quantum_, config);
+  if (key.empty()) {
+    bypassed_.fetch_add(1, std::memory_order_relaxed);
+    return Interpolant<Dim>(sorted, config);
+  }
+  auto entry = map_.find(key);
+  if (entry) {
+    hits_.fetch_add(1, std::memory_order_relaxed);
+  } else {
+    misses_.fetch_add(1, std::memory_order_relaxed);
+    std::vector<Vec<Dim>> unit;
+    shape_offsets<Dim>(key, static_cast<int>(nodes.size()), quantum_, unit);
+    entry = map_.insert(key, Interpolant<Dim>::factorise(unit, config));
+    if (entries_.fetch_add(1, std::memory_order_relaxed) + 1 > max_entries_) {
+      map_.clear();
+      entries_ = 0;
+      flushes_.fetch_add(1, std::memory_order_relaxed);
+    }
+  }
+  return Interpolant<Dim>(std::move(entry), at, h);
+}
+
+template class InterpolantCache<2>;
+template class InterpolantCache<3>;
+
+}  // namespace liquid::rbf

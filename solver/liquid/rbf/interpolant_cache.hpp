@@ -1,0 +1,55 @@
+#pragma once
+// Interpolants that share their factorisation with every congruent stencil (shape_key.hpp): the
+// face -> particle transfer factorises one RBF system per cell and axis, and on a tree most cells
+// see the same layout of faces around them, so most of those factorisations are the same matrix.
+// The nodes are put in canonical order (canonical_order, from the cell's centre in units of its
+// size), so stencils gathered in any order share an entry. An entry is factorised from the key's
+// own offsets, so an interpolant does not depend on which cell or thread missed first.
+// Safe under OpenMP.
+//
+//   InterpolantCache<2> cache;
+//   auto interp = cache.interpolant(nodes, graph.centre(c), graph.cell_size(c)[0], config, order);
+//   for (j...) v[j] = values[order[j]];
+//   interp.fit(v);
+
+#include <atomic>
+#include <cstddef>
+#include <span>
+#include <vector>
+
+#include "liquid/rbf/interpolant.hpp"
+#include "liquid/rbf/shape_key.hpp"
+
+namespace liquid::rbf {
+
+template <int Dim>
+class InterpolantCache {
+ public:
+  /// `max_entries`: past this many factorisations the cache is emptied (interpolants already
+  /// handed out keep theirs); `quantum`: offsets (units of h) closer than this share an entry.
+  explicit InterpolantCache(std::size_t max_entries = 4096, double quantum = 0x1p-24);
+
+  /// An interpolant of `nodes` (seen from `at`, the stencil's cell centre, with `h` its size). Its
+  /// j-th node is nodes[order[j]] (`order`, out): give fit() the values in that order. Stencils
+  /// off the quantum or with a non-finite coordinate are factorised directly (counted as bypassed).
+  Interpolant<Dim> interpolant(std::span<const Vec<Dim>> nodes, const Vec<Dim>& at, double h,
+                               const Config& config, std::vector<int>& order);
+
+  long hits() const { return hits_.load(std::memory_order_relaxed); }
+  long misses() const { return misses_.load(std::memory_order_relaxed); }
+  long bypassed() const { return bypassed_.load(std::memory_order_relaxed); }
+  long flushes() const { return flushes_.load(std::memory_order_relaxed); }  ///< times emptied when full
+  std::size_t size() const { return map_.size(); }
+
+ private:
+  std::size_t max_entries_;
+  double quantum_;
+  ShapeMap<typename Interpolant<Dim>::Factors> map_;
+  std::atomic<std::size_t> entries_{0};
+  std::atomic<long> hits_{0};
+  std::atomic<long> misses_{0};
+  std::atomic<long> bypassed_{0};
+  std::atomic<long> flushes_{0};
+};
+
+}  // namespace liquid::rbf
