@@ -5,7 +5,8 @@
 //
 // Transfers run on one uniform tree per dimension (2D level 8, 3D level 5: 65k and 32k cells) with
 // 2^d jittered Halton particles per cell, so every method sees the same data. Methods: 0 rbf
-// (paper), 1 cubic mls, 2 linear fit, 3 PIC (multilinear), 4 APIC.
+// (paper), 1 cubic mls, 2 linear fit, 3 PIC (multilinear), 4 APIC, 5 rbf with each cell's own
+// factorisation (share_factors = false; face -> particle only).
 #include <benchmark/benchmark.h>
 
 #include <memory>
@@ -19,7 +20,7 @@
 namespace liquid {
 namespace {
 
-const char* kMethodNames[] = {"rbf", "mls", "linear", "pic", "apic"};
+const char* kMethodNames[] = {"rbf", "mls", "linear", "pic", "apic", "rbf, own factors"};
 
 template <int Dim>
 struct Scene {
@@ -51,6 +52,11 @@ Scene<Dim>& scene() {
 }
 
 TransferOptions scattered(int method) {
+  if (method == 5) {
+    TransferOptions o = TransferOptions::paper_rbf();
+    o.share_factors = false;
+    return o;
+  }
   return method == 0 ? TransferOptions::paper_rbf()
                      : (method == 1 ? TransferOptions::cubic_mls() : TransferOptions::linear_fit());
 }
@@ -82,7 +88,7 @@ void BM_ToParticles(benchmark::State& state) {
   std::vector<Vec<Dim>> v(s.particles.size());
   std::vector<double> affine(static_cast<std::size_t>(s.particles.size()) * Dim * Dim);
   for (auto _ : state) {
-    if (method < 3)
+    if (method < 3 || method == 5)
       faces_to_points<Dim>(s.graph, s.faces.value, {}, s.particles.x, s.bins, scattered(method), v);
     else
       linear_to_points<Dim>(*s.lattice, s.faces.value, s.particles.x, v,
@@ -138,8 +144,8 @@ BENCHMARK_TEMPLATE(BM_Binning, 2)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)
 BENCHMARK_TEMPLATE(BM_Binning, 3)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK_TEMPLATE(BM_ToFaces, 2)->DenseRange(0, 4)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK_TEMPLATE(BM_ToFaces, 3)->DenseRange(0, 4)->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK_TEMPLATE(BM_ToParticles, 2)->DenseRange(0, 4)->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK_TEMPLATE(BM_ToParticles, 3)->DenseRange(0, 4)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK_TEMPLATE(BM_ToParticles, 2)->DenseRange(0, 5)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK_TEMPLATE(BM_ToParticles, 3)->DenseRange(0, 5)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 }  // namespace
 }  // namespace liquid

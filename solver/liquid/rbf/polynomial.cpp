@@ -37,13 +37,6 @@ PolynomialBasis<Dim>::PolynomialBasis(int degree) : degree_(degree) {
 }
 
 template <int Dim>
-double PolynomialBasis<Dim>::value(int term, const Vec<Dim>& x) const {
-  double out = 1.0;
-  for (int k = 0; k < Dim; ++k) out *= ipow(x[k], exponents_[term][k]);
-  return out;
-}
-
-template <int Dim>
 double PolynomialBasis<Dim>::derivative(int term, int k, const Vec<Dim>& x) const {
   const auto& e = exponents_[term];
   if (e[k] == 0) return 0.0;

@@ -22,8 +22,16 @@ class PolynomialBasis {
   int size() const { return static_cast<int>(exponents_.size()); }
   const std::array<int, Dim>& exponents(int term) const { return exponents_[term]; }
 
-  /// Value of term `term` at x.
-  double value(int term, const Vec<Dim>& x) const;
+  /// Value of term `term` at x (inline: the transfers evaluate it in their inner loops).
+  double value(int term, const Vec<Dim>& x) const {
+    double out = 1.0;
+    for (int k = 0; k < Dim; ++k) {
+      double power = 1.0;
+      for (int i = 0; i < exponents_[term][k]; ++i) power *= x[k];
+      out *= power;
+    }
+    return out;
+  }
   /// d/dx_k of term `term` at x.
   double derivative(int term, int k, const Vec<Dim>& x) const;
   /// Laplacian of term `term` at x.

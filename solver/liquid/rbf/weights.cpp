@@ -1,6 +1,7 @@
 #include "liquid/rbf/weights.hpp"
 
 #include <cmath>
+#include <vector>
 
 #include <fmt/format.h>
 #include <Eigen/QR>
@@ -38,18 +39,21 @@ std::string Status::describe() const {
 namespace detail {
 
 namespace {
-// Highest degree whose polynomial block has full column rank on these nodes (-1: none).
+// Highest degree whose polynomial block has full column rank on these nodes (-1: none). `P` (out)
+// holds the basis of degree min(requested, 4) at the nodes; a lower degree's block is its first
+// columns (the terms are ordered by total degree).
 template <int Dim>
-int carried_degree(std::span<const Vec<Dim>> z, int requested, double tolerance) {
+int carried_degree(std::span<const Vec<Dim>> z, int requested, double tolerance, Eigen::MatrixXd& P) {
   const int n = static_cast<int>(z.size());
-  for (int m = std::min(requested, 4); m >= 0; --m) {
-    PolynomialBasis<Dim> basis(m);
-    const int n_terms = basis.size();
+  const int top = std::min(requested, 4);
+  const PolynomialBasis<Dim> full(top);
+  P.resize(n, full.size());
+  for (int j = 0; j < n; ++j)
+    for (int t = 0; t < full.size(); ++t) P(j, t) = full.value(t, z[j]);
+  for (int m = top; m >= 0; --m) {
+    const int n_terms = n_polynomial_terms(Dim, m);
     if (n_terms > n) continue;
-    Eigen::MatrixXd P(n, n_terms);
-    for (int j = 0; j < n; ++j)
-      for (int t = 0; t < n_terms; ++t) P(j, t) = basis.value(t, z[j]);
-    Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(P);
+    Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(P.leftCols(n_terms));
     qr.setThreshold(tolerance);
     if (qr.rank() == n_terms) return m;
   }
@@ -67,6 +71,9 @@ SaddleSystem<Dim>::SaddleSystem(std::span<const Vec<Dim>> z, const Config& confi
     status.info = Info::empty_stencil;
     return;
   }
+  // The pairwise distances, once: for the coincidence test and then the kernel block.
+  thread_local std::vector<double> distance;
+  distance.resize(static_cast<std::size_t>(n_nodes) * n_nodes);
   for (int i = 0; i < n_nodes; ++i) {
     if (!z[i].allFinite()) {
       status.info = Info::non_finite;
@@ -74,15 +81,18 @@ SaddleSystem<Dim>::SaddleSystem(std::span<const Vec<Dim>> z, const Config& confi
       return;
     }
     for (int j = 0; j < i; ++j) {
-      if ((z[i] - z[j]).norm() < config.coincidence_tolerance) {
+      const double d = (z[i] - z[j]).norm();
+      if (d < config.coincidence_tolerance) {
         status.info = Info::coincident_nodes;
         status.node_a = j;
         status.node_b = i;
         return;
       }
+      distance[static_cast<std::size_t>(i) * n_nodes + j] = d;
     }
   }
-  const int degree = carried_degree<Dim>(z, config.degree, config.rank_tolerance);
+  Eigen::MatrixXd P;
+  const int degree = carried_degree<Dim>(z, config.degree, config.rank_tolerance, P);
   status.degree_used = degree;
   basis = PolynomialBasis<Dim>(degree);
   n_terms = basis.size();
@@ -90,8 +100,9 @@ SaddleSystem<Dim>::SaddleSystem(std::span<const Vec<Dim>> z, const Config& confi
   const int size = n_nodes + n_terms;
   Eigen::MatrixXd K = Eigen::MatrixXd::Zero(size, size);
   for (int i = 0; i < n_nodes; ++i) {
-    for (int j = 0; j < i; ++j) K(i, j) = K(j, i) = kernel.value((z[i] - z[j]).norm());
-    for (int t = 0; t < n_terms; ++t) K(i, n_nodes + t) = K(n_nodes + t, i) = basis.value(t, z[i]);
+    for (int j = 0; j < i; ++j)
+      K(i, j) = K(j, i) = kernel.value(distance[static_cast<std::size_t>(i) * n_nodes + j]);
+    for (int t = 0; t < n_terms; ++t) K(i, n_nodes + t) = K(n_nodes + t, i) = P(i, t);
   }
   lu.compute(K);
   matrix = std::move(K);
