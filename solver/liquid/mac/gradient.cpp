@@ -12,7 +12,7 @@ namespace liquid::mac {
 template <int Dim>
 std::vector<double> face_normal_derivative(const CellGraph<Dim>& graph, const DofLayout<Dim>& layout,
                                            const Boundary<Dim>& boundary, const PoissonOptions& options,
-                                           const linalg::Vector& p) {
+                                           const linalg::Vector& p, rbf::WeightCache<Dim>* shared) {
   LIQUID_VERIFY(p.size() >= layout.n_unknowns(), "face_normal_derivative: {} values for {} unknowns",
                 p.size(), layout.n_unknowns());
   std::vector<double> out(graph.face_capacity(), std::numeric_limits<double>::quiet_NaN());
@@ -21,7 +21,7 @@ std::vector<double> face_normal_derivative(const CellGraph<Dim>& graph, const Do
   config.degree = options.gradient_degree;
   const int n_target = stencil_size(Dim, config.degree, options.growth);
   rbf::WeightCache<Dim> weight_cache;
-  rbf::WeightCache<Dim>* const cache = options.cache_weights ? &weight_cache : nullptr;
+  rbf::WeightCache<Dim>* const cache = options.cache_weights ? (shared ? shared : &weight_cache) : nullptr;
   parallel_for(
       static_cast<long>(faces.size()), [] { return RowScratch<Dim>{}; },
       [&](RowScratch<Dim>& scratch, long q) {
@@ -59,9 +59,9 @@ std::vector<double> face_normal_derivative(const CellGraph<Dim>& graph, const Do
 
 template std::vector<double> face_normal_derivative<2>(const CellGraph<2>&, const DofLayout<2>&,
                                                        const Boundary<2>&, const PoissonOptions&,
-                                                       const linalg::Vector&);
+                                                       const linalg::Vector&, rbf::WeightCache<2>*);
 template std::vector<double> face_normal_derivative<3>(const CellGraph<3>&, const DofLayout<3>&,
                                                        const Boundary<3>&, const PoissonOptions&,
-                                                       const linalg::Vector&);
+                                                       const linalg::Vector&, rbf::WeightCache<3>*);
 
 }  // namespace liquid::mac

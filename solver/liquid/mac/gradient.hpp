@@ -16,10 +16,10 @@ namespace liquid::mac {
 /// dp/dx_axis at every interior face whose two cells are unknowns, indexed by face id (NaN at the
 /// others). `p` holds one value per unknown of `layout` (extra trailing entries are ignored);
 /// known values (interface, walls) come from `boundary`. Throws liquid::Error naming the face when
-/// a stencil has no usable weights.
+/// a stencil has no usable weights. `cache`: as assemble_poisson's.
 template <int Dim>
 std::vector<double> face_normal_derivative(const CellGraph<Dim>& graph, const DofLayout<Dim>& layout,
                                            const Boundary<Dim>& boundary, const PoissonOptions& options,
-                                           const linalg::Vector& p);
+                                           const linalg::Vector& p, rbf::WeightCache<Dim>* cache = nullptr);
 
 }  // namespace liquid::mac

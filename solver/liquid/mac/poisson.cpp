@@ -31,11 +31,12 @@ CellId pin_cell(const CellGraph<Dim>& graph, const DofLayout<Dim>& layout) {
 template <int Dim>
 std::vector<Row> laplacian_rows(const CellGraph<Dim>& graph, const PoissonSystem<Dim>& sys,
                                 const PoissonProblem<Dim>& problem, const PoissonOptions& options,
-                                AssemblyStats& stats) {
+                                rbf::WeightCache<Dim>* shared, AssemblyStats& stats) {
   const long n = sys.n_unknowns();
   std::vector<Row> rows(n);
   rbf::WeightCache<Dim> weight_cache;
-  rbf::WeightCache<Dim>* const cache = options.cache_weights ? &weight_cache : nullptr;
+  rbf::WeightCache<Dim>* const cache = options.cache_weights ? (shared ? shared : &weight_cache) : nullptr;
+  const long hits_before = cache ? cache->hits() : 0;
   struct Local {
     RowScratch<Dim> scratch;
     AssemblyStats stats;
@@ -92,7 +93,7 @@ std::vector<Row> laplacian_rows(const CellGraph<Dim>& graph, const PoissonSystem
         if (s.worst_condition > stats.worst_condition)
           stats.worst_condition = s.worst_condition, stats.worst_condition_cell = s.worst_condition_cell;
       });
-  stats.n_cache_hits = weight_cache.hits();
+  stats.n_cache_hits = cache ? cache->hits() - hits_before : 0;
   return rows;
 }
 
@@ -143,7 +144,7 @@ void fill_matrix(const CellGraph<Dim>& graph, const std::vector<Row>& rows, Pois
 
 template <int Dim>
 PoissonSystem<Dim> assemble_poisson(const CellGraph<Dim>& graph, const PoissonProblem<Dim>& problem,
-                                    const PoissonOptions& options) {
+                                    const PoissonOptions& options, rbf::WeightCache<Dim>* cache) {
   LIQUID_VERIFY(problem.f || !problem.f_cells.empty(), "Poisson problem without a right-hand side");
   LIQUID_VERIFY(problem.f_cells.empty() || static_cast<int>(problem.f_cells.size()) >= graph.cell_capacity(),
                 "Poisson problem: {} right-hand-side values for {} cell ids", problem.f_cells.size(),
@@ -178,7 +179,7 @@ PoissonSystem<Dim> assemble_poisson(const CellGraph<Dim>& graph, const PoissonPr
     sys.pinned = pin_cell(graph, sys.layout);
   }
   AssemblyStats stats;
-  const std::vector<Row> rows = laplacian_rows(graph, sys, problem, options, stats);
+  const std::vector<Row> rows = laplacian_rows(graph, sys, problem, options, cache, stats);
   fill_matrix(graph, rows, sys);
   stats.n_unknowns = sys.n_unknowns();
   stats.seconds = watch.seconds();
@@ -187,8 +188,8 @@ PoissonSystem<Dim> assemble_poisson(const CellGraph<Dim>& graph, const PoissonPr
 }
 
 template PoissonSystem<2> assemble_poisson<2>(const CellGraph<2>&, const PoissonProblem<2>&,
-                                              const PoissonOptions&);
+                                              const PoissonOptions&, rbf::WeightCache<2>*);
 template PoissonSystem<3> assemble_poisson<3>(const CellGraph<3>&, const PoissonProblem<3>&,
-                                              const PoissonOptions&);
+                                              const PoissonOptions&, rbf::WeightCache<3>*);
 
 }  // namespace liquid::mac

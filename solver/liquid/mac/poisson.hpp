@@ -66,15 +66,19 @@ struct PoissonSystem {
 
 /// Assembles the system. Throws liquid::Error naming the cell when a stencil has no usable
 /// weights, when the level set leaves no unknowns, and when f or a boundary value is not finite.
+/// `cache` (with options.cache_weights): the RBF-FD weight cache to use, e.g. one kept across the
+/// time steps of a solver; none: a cache for this assembly alone. The weights are the same bits
+/// either way (an entry is a function of its key).
 template <int Dim>
 PoissonSystem<Dim> assemble_poisson(const CellGraph<Dim>& graph, const PoissonProblem<Dim>& problem,
-                                    const PoissonOptions& options);
+                                    const PoissonOptions& options, rbf::WeightCache<Dim>* cache = nullptr);
 
 /// face_normal_derivative() on the system's unknowns and boundary.
 template <int Dim>
 std::vector<double> face_normal_derivative(const CellGraph<Dim>& graph, const PoissonSystem<Dim>& system,
-                                           const PoissonOptions& options, const linalg::Vector& p) {
-  return face_normal_derivative<Dim>(graph, system.layout, system.boundary, options, p);
+                                           const PoissonOptions& options, const linalg::Vector& p,
+                                           rbf::WeightCache<Dim>* cache = nullptr) {
+  return face_normal_derivative<Dim>(graph, system.layout, system.boundary, options, p, cache);
 }
 
 }  // namespace liquid::mac

@@ -108,6 +108,7 @@ AdaptivePic<Dim>::AdaptivePic(const PicOptions<Dim>& options)
   u_.assign(graph_.face_capacity(), 0.0);
   known_.assign(graph_.face_capacity(), 1);
   p_.assign(graph_.cell_capacity(), 0.0);
+  weights_ = std::make_unique<rbf::WeightCache<Dim>>(0x1p-24, std::size_t{1} << 15);
   // Made here, outside the timed phases: an AMG solver starts MPI (about 0.3 s) when it is made.
   ppe_solver_ = linalg::make_solver(options_.solver);
 }
@@ -535,7 +536,7 @@ void AdaptivePic<Dim>::assemble(double dt) {
     return 0.0;
   };
   if (options_.projection != PicProjection::volume && !volume_pass_) problem.face_coefficient = face_beta_;
-  system_ = mac::assemble_poisson<Dim>(graph_, problem, options_.poisson);
+  system_ = mac::assemble_poisson<Dim>(graph_, problem, options_.poisson, weights_.get());
   if (!solid_.empty()) fold_solid_rows();
 }
 
@@ -640,7 +641,8 @@ void AdaptivePic<Dim>::solve_pressure(PicStepReport& r) {
 
 template <int Dim>
 double AdaptivePic<Dim>::project(double dt) {
-  std::vector<double> dn = mac::face_normal_derivative<Dim>(graph_, system_, options_.poisson, system_.b);
+  std::vector<double> dn =
+      mac::face_normal_derivative<Dim>(graph_, system_, options_.poisson, system_.b, weights_.get());
   if (surface_) interface_gradients(dt, dn);
   // The mass and split projections keep the transferred value of faces that hold mass (see below).
   const bool keep_massed = options_.projection != PicProjection::volume && !face_mass_.empty();

@@ -297,6 +297,9 @@ class AdaptivePic {
   bool volume_pass_ = false;              ///< split: assemble and project in volumes
   std::vector<std::uint8_t> known_;
   mac::PoissonSystem<Dim> system_;
+  /// The RBF-FD weights of the PPE rows and face gradients, kept across steps: a step's tree keeps
+  /// most of the last step's T-junction layouts, and an entry is a function of its layout alone.
+  std::unique_ptr<rbf::WeightCache<Dim>> weights_;
   // The PPE solver, kept across steps: an AMG solver keeps its hierarchy while the layout stays.
   std::unique_ptr<linalg::LinearSolver> ppe_solver_;
   PhaseTimer timer_;

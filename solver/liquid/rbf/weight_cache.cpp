@@ -10,7 +10,8 @@
 namespace liquid::rbf {
 
 template <int Dim>
-WeightCache<Dim>::WeightCache(double quantum) : quantum_(quantum) {
+WeightCache<Dim>::WeightCache(double quantum, std::size_t max_entries)
+    : quantum_(quantum), max_entries_(max_entries) {
   LIQUID_VERIFY(quantum > 0.0 && quantum < 1.0, "weight cache quantum must be in (0, 1), got {}", quantum);
 }
 
@@ -37,6 +38,11 @@ Status WeightCache<Dim>::weights(std::span<const Vec<Dim>> nodes, const Vec<Dim>
     shape_offsets<Dim>(key, static_cast<int>(nodes.size()), quantum_, unit);
     entry = map_.insert(
         key, std::make_shared<const BasisWeights<Dim>>(basis_weights<Dim>(unit, Vec<Dim>::Zero(), config)));
+    if (max_entries_ > 0 && entries_.fetch_add(1, std::memory_order_relaxed) + 1 > max_entries_) {
+      map_.clear();
+      entries_ = 0;
+      flushes_.fetch_add(1, std::memory_order_relaxed);
+    }
   }
 
   Status status = entry->status;
@@ -59,6 +65,8 @@ std::size_t WeightCache<Dim>::size() const {
 template <int Dim>
 void WeightCache<Dim>::clear() {
   map_.clear();
+  entries_ = 0;
+  flushes_ = 0;
   hits_ = 0;
   misses_ = 0;
   bypassed_ = 0;

@@ -19,8 +19,9 @@ namespace liquid::rbf {
 template <int Dim>
 class WeightCache {
  public:
-  /// `quantum`: offsets (in units of h) closer than this share an entry.
-  explicit WeightCache(double quantum = 0x1p-24);
+  /// `quantum`: offsets (in units of h) closer than this share an entry. `max_entries` (0: no
+  /// limit): past this many entries the cache is emptied (a cache kept across many assemblies).
+  explicit WeightCache(double quantum = 0x1p-24, std::size_t max_entries = 0);
 
   /// Weights of `op` at `at` for `nodes`, with `h` the size of the centre cell. Same contract as
   /// rbf::weights(). Node order matters: a permuted stencil is a different entry.
@@ -30,12 +31,16 @@ class WeightCache {
   long hits() const { return hits_.load(std::memory_order_relaxed); }
   long misses() const { return misses_.load(std::memory_order_relaxed); }
   long bypassed() const { return bypassed_.load(std::memory_order_relaxed); }  ///< off-quantum stencils
+  long flushes() const { return flushes_.load(std::memory_order_relaxed); }    ///< times emptied when full
   std::size_t size() const;
   void clear();
 
  private:
   double quantum_;
+  std::size_t max_entries_;
   ShapeMap<BasisWeights<Dim>> map_;
+  std::atomic<std::size_t> entries_{0};
+  std::atomic<long> flushes_{0};
   std::atomic<long> hits_{0};
   std::atomic<long> misses_{0};
   std::atomic<long> bypassed_{0};

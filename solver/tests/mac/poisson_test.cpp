@@ -381,6 +381,39 @@ TEST(Poisson, WeightCacheChangesOnlyRoundOff) {
   check_cache_changes_nothing<2>(dirichlet, non_graded<2>(3, 2.0), false);
 }
 
+// A weight cache kept across assemblies (a PIC solver's, across its steps) gives the same bits as
+// a cache for one assembly, serves every RBF-FD row of a repeated assembly, and keeps serving after
+// it has been emptied for being full.
+TEST(Poisson, WeightCacheKeptAcrossAssembliesGivesTheSameBits) {
+  PoissonProblem<3> neumann;
+  neumann.f = quad_laplacian<3>;
+  neumann.pin_value = quad<3>;
+  const Box<3> box{Vec<3>::Constant(-2.0), Vec<3>::Constant(2.0)};
+  const auto plane = tree::narrow_band<3>(
+      box, [](const Vec<3>& x) { return x[2] - 0.3; }, 2, 4, 2.0);
+  const PoissonSystem<3> alone = assemble_poisson<3>(plane, neumann, PoissonOptions{});
+  rbf::WeightCache<3> kept, small(0x1p-24, 16);
+  for (int pass = 0; pass < 2; ++pass) {
+    for (rbf::WeightCache<3>* cache : {&kept, &small}) {
+      const PoissonSystem<3> sys = assemble_poisson<3>(plane, neumann, PoissonOptions{}, cache);
+      ASSERT_EQ(sys.A.nonZeros(), alone.A.nonZeros());
+      EXPECT_EQ((sys.A - alone.A).cwiseAbs().sum(), 0.0);
+      EXPECT_EQ((sys.b - alone.b).cwiseAbs().maxCoeff(), 0.0);
+      const linalg::Vector p = linalg::Vector::LinSpaced(sys.n_unknowns(), -1.0, 2.0);
+      const std::vector<double> a = face_normal_derivative<3>(plane, sys, PoissonOptions{}, p, cache);
+      const std::vector<double> b = face_normal_derivative<3>(plane, alone, PoissonOptions{}, p);
+      ASSERT_EQ(a.size(), b.size());
+      for (std::size_t f = 0; f < a.size(); ++f)
+        if (!std::isnan(b[f])) ASSERT_EQ(a[f], b[f]) << "face " << f;
+    }
+  }
+  const PoissonSystem<3> again = assemble_poisson<3>(plane, neumann, PoissonOptions{}, &kept);
+  ASSERT_GT(again.stats.n_rbf_rows, 0);
+  EXPECT_GE(again.stats.n_cache_hits, again.stats.n_rbf_rows);  // a kept cache misses nothing
+  EXPECT_LT(alone.stats.n_cache_hits, alone.stats.n_rbf_rows);  // a fresh one misses some
+  EXPECT_GT(small.flushes(), 0);
+}
+
 }  // namespace
 }  // namespace liquid::mac
 
