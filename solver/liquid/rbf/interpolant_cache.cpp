@@ -10,7 +10,7 @@ namespace liquid::rbf {
 
 template <int Dim>
 InterpolantCache<Dim>::InterpolantCache(std::size_t max_entries, double quantum)
-    : max_entries_(max_entries), quantum_(quantum) {
+    : quantum_(quantum), map_(max_entries) {
   LIQUID_VERIFY(max_entries > 0, "interpolant cache: max_entries must be positive");
   LIQUID_VERIFY(quantum > 0.0 && quantum < 1.0, "interpolant cache quantum must be in (0, 1), got {}",
                 quantum);
@@ -37,20 +37,9 @@ Interpolant<Dim> InterpolantCache<Dim>::interpolant(std::span<const Vec<Dim>> no
     bypassed_.fetch_add(1, std::memory_order_relaxed);
     return Interpolant<Dim>(sorted, config);
   }
-  auto entry = map_.find(key);
-  if (entry) {
-    hits_.fetch_add(1, std::memory_order_relaxed);
-  } else {
-    misses_.fetch_add(1, std::memory_order_relaxed);
-    std::vector<Vec<Dim>> unit;
-    shape_offsets<Dim>(key, static_cast<int>(nodes.size()), quantum_, unit);
-    entry = map_.insert(key, Interpolant<Dim>::factorise(unit, config));
-    if (entries_.fetch_add(1, std::memory_order_relaxed) + 1 > max_entries_) {
-      map_.clear();
-      entries_ = 0;
-      flushes_.fetch_add(1, std::memory_order_relaxed);
-    }
-  }
+  auto entry = map_.template find_or_make<Dim>(
+      key, static_cast<int>(nodes.size()), quantum_,
+      [&](std::span<const Vec<Dim>> unit) { return Interpolant<Dim>::factorise(unit, config); });
   return Interpolant<Dim>(std::move(entry), at, h);
 }
 

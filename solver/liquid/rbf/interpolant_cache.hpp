@@ -35,21 +35,16 @@ class InterpolantCache {
   Interpolant<Dim> interpolant(std::span<const Vec<Dim>> nodes, const Vec<Dim>& at, double h,
                                const Config& config, std::vector<int>& order);
 
-  long hits() const { return hits_.load(std::memory_order_relaxed); }
-  long misses() const { return misses_.load(std::memory_order_relaxed); }
+  long hits() const { return map_.hits(); }
+  long misses() const { return map_.misses(); }
   long bypassed() const { return bypassed_.load(std::memory_order_relaxed); }
-  long flushes() const { return flushes_.load(std::memory_order_relaxed); }  ///< times emptied when full
+  long flushes() const { return map_.flushes(); }  ///< times emptied when full
   std::size_t size() const { return map_.size(); }
 
  private:
-  std::size_t max_entries_;
   double quantum_;
   ShapeMap<typename Interpolant<Dim>::Factors> map_;
-  std::atomic<std::size_t> entries_{0};
-  std::atomic<long> hits_{0};
-  std::atomic<long> misses_{0};
   std::atomic<long> bypassed_{0};
-  std::atomic<long> flushes_{0};
 };
 
 }  // namespace liquid::rbf

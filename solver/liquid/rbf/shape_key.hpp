@@ -9,6 +9,7 @@
 // offsets (shape_offsets), never from the stencil that happened to miss first, so that what a
 // lookup returns does not depend on which thread got there first.
 
+#include <atomic>
 #include <cstdint>
 #include <memory>
 #include <mutex>
@@ -43,26 +44,43 @@ ShapeKey shape_key(std::span<const Vec<Dim>> nodes, const Vec<Dim>& at, double h
 template <int Dim>
 void shape_offsets(const ShapeKey& key, int n_nodes, double quantum, std::vector<Vec<Dim>>& out);
 
-/// Entries shared by key, safe under OpenMP: a lookup takes a shared lock on one of many shards,
-/// and a miss is computed by the caller outside any lock and then offered with insert(), which keeps
-/// the first entry offered for a key.
+/// Entries shared by key, safe under OpenMP: a lookup takes a shared lock on one of many shards; a
+/// miss is made outside any lock, and the first entry made for a key is the one kept. With
+/// `max_entries` (0: no limit) the map is emptied when it would hold more (entries already handed
+/// out live on with their holders).
 template <class Value>
 class ShapeMap {
  public:
-  ShapeMap() : shards_(new Shard[n_shards]) {}
+  explicit ShapeMap(std::size_t max_entries = 0) : max_entries_(max_entries), shards_(new Shard[n_shards]) {}
 
-  std::shared_ptr<const Value> find(const ShapeKey& key) const {
-    const Shard& s = shard(key);
-    std::shared_lock lock(s.mutex);
-    auto it = s.map.find(key);
-    return it == s.map.end() ? nullptr : it->second;
-  }
-  /// The entry kept for `key`: `value`, or the one another thread inserted first.
-  std::shared_ptr<const Value> insert(const ShapeKey& key, std::shared_ptr<const Value> value) {
+  /// The entry for `key`, made by `make(offsets)` on a miss from the key's own offsets (units of h,
+  /// `n_nodes` of them, on `quantum`) so that it is a function of the key alone.
+  template <int Dim, class Make>
+  std::shared_ptr<const Value> find_or_make(const ShapeKey& key, int n_nodes, double quantum, Make&& make) {
     Shard& s = shard(key);
+    {
+      std::shared_lock lock(s.mutex);
+      auto it = s.map.find(key);
+      if (it != s.map.end()) {
+        hits_.fetch_add(1, std::memory_order_relaxed);
+        return it->second;
+      }
+    }
+    misses_.fetch_add(1, std::memory_order_relaxed);
+    std::vector<Vec<Dim>> offsets;
+    shape_offsets<Dim>(key, n_nodes, quantum, offsets);
+    std::shared_ptr<const Value> made = make(std::span<const Vec<Dim>>(offsets));
+    if (max_entries_ > 0 && entries_.fetch_add(1, std::memory_order_relaxed) + 1 > max_entries_) {
+      clear_entries();
+      flushes_.fetch_add(1, std::memory_order_relaxed);
+    }
     std::unique_lock lock(s.mutex);
-    return s.map.emplace(key, std::move(value)).first->second;
+    return s.map.emplace(key, std::move(made)).first->second;
   }
+
+  long hits() const { return hits_.load(std::memory_order_relaxed); }
+  long misses() const { return misses_.load(std::memory_order_relaxed); }
+  long flushes() const { return flushes_.load(std::memory_order_relaxed); }
   std::size_t size() const {
     std::size_t n = 0;
     for (int i = 0; i < n_shards; ++i) {
@@ -71,14 +89,23 @@ class ShapeMap {
     }
     return n;
   }
+  /// Empties the map and its counts.
   void clear() {
+    clear_entries();
+    hits_ = 0;
+    misses_ = 0;
+    flushes_ = 0;
+  }
+
+ private:
+  void clear_entries() {
     for (int i = 0; i < n_shards; ++i) {
       std::unique_lock lock(shards_[i].mutex);
       shards_[i].map.clear();
     }
+    entries_ = 0;
   }
 
- private:
   struct Shard {
     mutable std::shared_mutex mutex;
     std::unordered_map<ShapeKey, std::shared_ptr<const Value>, ShapeKeyHash> map;
@@ -86,7 +113,10 @@ class ShapeMap {
   static constexpr int n_shards = 64;
   Shard& shard(const ShapeKey& key) const { return shards_[ShapeKeyHash{}(key) % n_shards]; }
 
+  std::size_t max_entries_;
   std::unique_ptr<Shard[]> shards_;
+  std::atomic<std::size_t> entries_{0};
+  std::atomic<long> hits_{0}, misses_{0}, flushes_{0};
 };
 
 }  // namespace liquid::rbf

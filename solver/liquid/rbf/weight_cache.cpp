@@ -11,7 +11,7 @@ namespace liquid::rbf {
 
 template <int Dim>
 WeightCache<Dim>::WeightCache(double quantum, std::size_t max_entries)
-    : quantum_(quantum), max_entries_(max_entries) {
+    : quantum_(quantum), map_(max_entries) {
   LIQUID_VERIFY(quantum > 0.0 && quantum < 1.0, "weight cache quantum must be in (0, 1), got {}", quantum);
 }
 
@@ -28,22 +28,10 @@ Status WeightCache<Dim>::weights(std::span<const Vec<Dim>> nodes, const Vec<Dim>
     bypassed_.fetch_add(1, std::memory_order_relaxed);
     return rbf::weights<Dim>(nodes, at, op, config, out);
   }
-  std::shared_ptr<const BasisWeights<Dim>> entry = map_.find(key);
-  if (entry) {
-    hits_.fetch_add(1, std::memory_order_relaxed);
-  } else {
-    misses_.fetch_add(1, std::memory_order_relaxed);
-    // The offsets in units of h, read back from the key: a function of the key alone.
-    std::vector<Vec<Dim>> unit;
-    shape_offsets<Dim>(key, static_cast<int>(nodes.size()), quantum_, unit);
-    entry = map_.insert(
-        key, std::make_shared<const BasisWeights<Dim>>(basis_weights<Dim>(unit, Vec<Dim>::Zero(), config)));
-    if (max_entries_ > 0 && entries_.fetch_add(1, std::memory_order_relaxed) + 1 > max_entries_) {
-      map_.clear();
-      entries_ = 0;
-      flushes_.fetch_add(1, std::memory_order_relaxed);
-    }
-  }
+  const std::shared_ptr<const BasisWeights<Dim>> entry = map_.template find_or_make<Dim>(
+      key, static_cast<int>(nodes.size()), quantum_, [&](std::span<const Vec<Dim>> unit) {
+        return std::make_shared<const BasisWeights<Dim>>(basis_weights<Dim>(unit, Vec<Dim>::Zero(), config));
+      });
 
   Status status = entry->status;
   if (!status.usable()) return status;
@@ -65,10 +53,6 @@ std::size_t WeightCache<Dim>::size() const {
 template <int Dim>
 void WeightCache<Dim>::clear() {
   map_.clear();
-  entries_ = 0;
-  flushes_ = 0;
-  hits_ = 0;
-  misses_ = 0;
   bypassed_ = 0;
 }
 

@@ -28,21 +28,16 @@ class WeightCache {
   Status weights(std::span<const Vec<Dim>> nodes, const Vec<Dim>& at, double h, const Operator<Dim>& op,
                  const Config& config, std::vector<double>& out);
 
-  long hits() const { return hits_.load(std::memory_order_relaxed); }
-  long misses() const { return misses_.load(std::memory_order_relaxed); }
+  long hits() const { return map_.hits(); }
+  long misses() const { return map_.misses(); }
   long bypassed() const { return bypassed_.load(std::memory_order_relaxed); }  ///< off-quantum stencils
-  long flushes() const { return flushes_.load(std::memory_order_relaxed); }    ///< times emptied when full
+  long flushes() const { return map_.flushes(); }                              ///< times emptied when full
   std::size_t size() const;
   void clear();
 
  private:
   double quantum_;
-  std::size_t max_entries_;
   ShapeMap<BasisWeights<Dim>> map_;
-  std::atomic<std::size_t> entries_{0};
-  std::atomic<long> flushes_{0};
-  std::atomic<long> hits_{0};
-  std::atomic<long> misses_{0};
   std::atomic<long> bypassed_{0};
 };
 

@@ -365,14 +365,22 @@ TEST(Poisson, AssemblyIsReproducibleAcrossThreadCounts) {
   EXPECT_EQ((serial.b - parallel.b).cwiseAbs().maxCoeff(), 0.0);
 }
 
-TEST(Poisson, WeightCacheChangesOnlyRoundOff) {
+/// The pure Neumann problem of the quadratic, and a narrow band around a plane from level `coarse`
+/// to `fine` in [-2, 2]^3.
+PoissonProblem<3> neumann_quadratic() {
   PoissonProblem<3> neumann;
   neumann.f = quad_laplacian<3>;
   neumann.pin_value = quad<3>;
+  return neumann;
+}
+CellGraph<3> plane_band(int coarse, int fine) {
   const Box<3> box{Vec<3>::Constant(-2.0), Vec<3>::Constant(2.0)};
-  const auto plane = tree::narrow_band<3>(
-      box, [](const Vec<3>& x) { return x[2] - 0.3; }, 3, 5, 2.0);
-  check_cache_changes_nothing<3>(neumann, plane, true);
+  return tree::narrow_band<3>(
+      box, [](const Vec<3>& x) { return x[2] - 0.3; }, coarse, fine, 2.0);
+}
+
+TEST(Poisson, WeightCacheChangesOnlyRoundOff) {
+  check_cache_changes_nothing<3>(neumann_quadratic(), plane_band(3, 5), true);
 
   PoissonProblem<2> dirichlet;
   dirichlet.f = quad_laplacian<2>;
@@ -385,12 +393,8 @@ TEST(Poisson, WeightCacheChangesOnlyRoundOff) {
 // a cache for one assembly, serves every RBF-FD row of a repeated assembly, and keeps serving after
 // it has been emptied for being full.
 TEST(Poisson, WeightCacheKeptAcrossAssembliesGivesTheSameBits) {
-  PoissonProblem<3> neumann;
-  neumann.f = quad_laplacian<3>;
-  neumann.pin_value = quad<3>;
-  const Box<3> box{Vec<3>::Constant(-2.0), Vec<3>::Constant(2.0)};
-  const auto plane = tree::narrow_band<3>(
-      box, [](const Vec<3>& x) { return x[2] - 0.3; }, 2, 4, 2.0);
+  const PoissonProblem<3> neumann = neumann_quadratic();
+  const CellGraph<3> plane = plane_band(2, 4);
   const PoissonSystem<3> alone = assemble_poisson<3>(plane, neumann, PoissonOptions{});
   rbf::WeightCache<3> kept, small(0x1p-24, 16);
   for (int pass = 0; pass < 2; ++pass) {
