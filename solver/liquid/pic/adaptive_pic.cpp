@@ -108,7 +108,7 @@ AdaptivePic<Dim>::AdaptivePic(const PicOptions<Dim>& options)
   u_.assign(graph_.face_capacity(), 0.0);
   known_.assign(graph_.face_capacity(), 1);
   p_.assign(graph_.cell_capacity(), 0.0);
-  weights_ = std::make_unique<rbf::WeightCache<Dim>>(0x1p-24, std::size_t{1} << 15);
+  weights_ = std::make_unique<rbf::WeightCache<Dim>>(0x1p-24, std::size_t{1} << 14);
   // Made here, outside the timed phases: an AMG solver starts MPI (about 0.3 s) when it is made.
   ppe_solver_ = linalg::make_solver(options_.solver);
 }

@@ -22,8 +22,10 @@ template <int Dim>
 class Interpolant {
  public:
   /// A node set translated to its centroid, scaled to the unit ball and factorised: what the
-  /// interpolants of congruent stencils share (InterpolantCache).
+  /// interpolants of congruent stencils share (InterpolantCache). Immutable once made.
   struct Factors;
+  /// Factors of `nodes`, in whatever frame they are given; an interpolant on them reads its points
+  /// in that frame (see the constructor taking factors).
   static std::shared_ptr<const Factors> factorise(std::span<const Vec<Dim>> nodes, const Config& config);
 
   /// Factorises the system for `nodes` (copied). Check status().usable() before fitting.
@@ -32,6 +34,7 @@ class Interpolant {
   /// point x is read as (x - origin) / scale.
   Interpolant(std::shared_ptr<const Factors> factors, const Vec<Dim>& origin, double scale);
   ~Interpolant();
+  /// A moved-from interpolant may only be destroyed or assigned to.
   Interpolant(Interpolant&&) noexcept;
   Interpolant& operator=(Interpolant&&) noexcept;
 

@@ -9,9 +9,8 @@
 namespace liquid::rbf {
 
 template <int Dim>
-InterpolantCache<Dim>::InterpolantCache(std::size_t max_entries, double quantum)
+InterpolantCache<Dim>::InterpolantCache(double quantum, std::size_t max_entries)
     : quantum_(quantum), map_(max_entries) {
-  LIQUID_VERIFY(max_entries > 0, "interpolant cache: max_entries must be positive");
   LIQUID_VERIFY(quantum > 0.0 && quantum < 1.0, "interpolant cache quantum must be in (0, 1), got {}",
                 quantum);
 }
@@ -20,9 +19,11 @@ template <int Dim>
 Interpolant<Dim> InterpolantCache<Dim>::interpolant(std::span<const Vec<Dim>> nodes, const Vec<Dim>& at,
                                                     double h, const Config& config, std::vector<int>& order) {
   LIQUID_VERIFY(h > 0.0 && std::isfinite(h), "interpolant cache needs a positive cell size, got {}", h);
-  bool finite = at.allFinite();
-  for (const auto& x : nodes) finite = finite && x.allFinite();
-  if (!finite) {  // the direct factorisation reports it
+  // Non-finite coordinates (the direct factorisation reports them) and offsets past 2^14 h (the
+  // canonical order's range) are factorised directly.
+  bool keyable = at.allFinite();
+  for (const auto& x : nodes) keyable = keyable && (x - at).cwiseAbs().maxCoeff() <= 0x1p14 * h;
+  if (!keyable) {
     order.resize(nodes.size());
     std::iota(order.begin(), order.end(), 0);
     bypassed_.fetch_add(1, std::memory_order_relaxed);

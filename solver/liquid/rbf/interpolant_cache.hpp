@@ -25,13 +25,15 @@ namespace liquid::rbf {
 template <int Dim>
 class InterpolantCache {
  public:
-  /// `max_entries`: past this many factorisations the cache is emptied (interpolants already
-  /// handed out keep theirs); `quantum`: offsets (units of h) closer than this share an entry.
-  explicit InterpolantCache(std::size_t max_entries = 4096, double quantum = 0x1p-24);
+  /// `quantum`: offsets (units of h) closer than this share an entry. `max_entries` (0: no limit):
+  /// past about this many factorisations the cache is emptied (interpolants already handed out keep
+  /// theirs). The same order and meaning as WeightCache's.
+  explicit InterpolantCache(double quantum = 0x1p-24, std::size_t max_entries = 4096);
 
   /// An interpolant of `nodes` (seen from `at`, the stencil's cell centre, with `h` its size). Its
-  /// j-th node is nodes[order[j]] (`order`, out): give fit() the values in that order. Stencils
-  /// off the quantum or with a non-finite coordinate are factorised directly (counted as bypassed).
+  /// j-th node is nodes[order[j]] (`order`, out): give fit() the values in that order; node indices
+  /// in its status (node_a, node_b) are in that order too. Stencils off the quantum, farther than
+  /// 2^14 h or with a non-finite coordinate are factorised directly (counted as bypassed).
   Interpolant<Dim> interpolant(std::span<const Vec<Dim>> nodes, const Vec<Dim>& at, double h,
                                const Config& config, std::vector<int>& order);
 

@@ -31,6 +31,8 @@ ShapeKey shape_key(std::span<const Vec<Dim>> nodes, const Vec<Dim>& at, double h
   key.words.push_back(static_cast<std::int64_t>(nodes.size()));
   for (const auto& x : nodes) {
     for (int k = 0; k < Dim; ++k) {
+      // Beyond 2^14 h the canonical order's squared offsets could overflow: no key.
+      if (!(std::abs(x[k] - at[k]) <= 0x1p14 * h)) return ShapeKey{};
       const double steps = (x[k] - at[k]) / (h * quantum);
       const double word = std::round(steps);
       // Off the quantum by more than round-off: the key's offsets would not be this stencil's.

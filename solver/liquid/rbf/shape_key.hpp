@@ -35,7 +35,7 @@ struct ShapeKeyHash {
 
 /// The key of `nodes` (in their order) seen from `at` in units of `h`, on `quantum`; an empty key
 /// when an offset is off the quantum by more than round-off (cells of a box whose sides are not in
-/// power-of-two ratios): such stencils are computed directly.
+/// power-of-two ratios) or farther than 2^14 h: such stencils are computed directly.
 template <int Dim>
 ShapeKey shape_key(std::span<const Vec<Dim>> nodes, const Vec<Dim>& at, double h, double quantum,
                    const Config& config);
@@ -46,8 +46,9 @@ void shape_offsets(const ShapeKey& key, int n_nodes, double quantum, std::vector
 
 /// Entries shared by key, safe under OpenMP: a lookup takes a shared lock on one of many shards; a
 /// miss is made outside any lock, and the first entry made for a key is the one kept. With
-/// `max_entries` (0: no limit) the map is emptied when it would hold more (entries already handed
-/// out live on with their holders).
+/// `max_entries` (0: no limit) the map is emptied once it holds more (approximately, under
+/// threads: an insertion racing a flush may survive it). Entries already handed out live on with
+/// their holders; what a lookup returns never depends on the map's state.
 template <class Value>
 class ShapeMap {
  public:
@@ -70,12 +71,19 @@ class ShapeMap {
     std::vector<Vec<Dim>> offsets;
     shape_offsets<Dim>(key, n_nodes, quantum, offsets);
     std::shared_ptr<const Value> made = make(std::span<const Vec<Dim>>(offsets));
-    if (max_entries_ > 0 && entries_.fetch_add(1, std::memory_order_relaxed) + 1 > max_entries_) {
+    std::shared_ptr<const Value> kept;
+    bool inserted = false;
+    {
+      std::unique_lock lock(s.mutex);
+      auto [it, fresh] = s.map.emplace(key, std::move(made));
+      kept = it->second;
+      inserted = fresh;
+    }
+    if (inserted && max_entries_ > 0 && entries_.fetch_add(1, std::memory_order_relaxed) + 1 > max_entries_) {
       clear_entries();
       flushes_.fetch_add(1, std::memory_order_relaxed);
     }
-    std::unique_lock lock(s.mutex);
-    return s.map.emplace(key, std::move(made)).first->second;
+    return kept;
   }
 
   long hits() const { return hits_.load(std::memory_order_relaxed); }

@@ -161,6 +161,8 @@ template <int Dim>
 rbf::Interpolant<Dim> fitted_interpolant(const CellGraph<Dim>& graph, CellId c,
                                          std::span<const Vec<Dim>> nodes, std::span<const double> values,
                                          const rbf::Config& config, rbf::InterpolantCache<Dim>* cache) {
+  LIQUID_VERIFY(values.size() == nodes.size(), "fitted_interpolant: {} values for {} nodes of cell {}",
+                values.size(), nodes.size(), c);
   const long n = static_cast<long>(values.size());
   if (cache == nullptr) {
     rbf::Interpolant<Dim> interp(nodes, config);

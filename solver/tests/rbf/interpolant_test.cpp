@@ -86,9 +86,11 @@ TEST(InterpolantCache, CongruentStencilsShareOneFactorisationAndMatchDirectInter
   EXPECT_EQ(cache.misses(), 1);
   EXPECT_EQ(cache.hits(), calls - 1);
   EXPECT_EQ(cache.size(), 1u);
-  // Other kernel settings are another entry.
-  cache.interpolant(base, Vec<2>::Zero(), 1.0, Config{3, 1}, order);
+  // Other kernel settings are other entries: the degree alone, then the exponent alone.
+  cache.interpolant(base, Vec<2>::Zero(), 1.0, Config{5, 1}, order);
   EXPECT_EQ(cache.misses(), 2);
+  cache.interpolant(base, Vec<2>::Zero(), 1.0, Config{3, 2}, order);
+  EXPECT_EQ(cache.misses(), 3);
 }
 
 // An entry is factorised from its key's offsets: the same layout met at places whose coordinates
@@ -122,16 +124,23 @@ TEST(InterpolantCache, EntriesDependOnTheKeyAloneAndOffQuantumStencilsBypass) {
 
   std::vector<Vec<3>> thirds = base;
   for (auto& x : thirds) x[1] /= 3.0;
-  InterpolantCache<3> cache(2);
+  InterpolantCache<3> cache(0x1p-24, 2);
   std::vector<int> order;
   EXPECT_TRUE(cache.interpolant(thirds, Vec<3>::Zero(), 1.0, Config{5, 2}, order).status().usable());
   EXPECT_EQ(cache.bypassed(), 1);
   EXPECT_EQ(cache.size(), 0u);
+  // An interpolant handed out before the cache empties itself keeps its factors.
+  Interpolant<3> early = cache.interpolant(base, Vec<3>::Zero(), 1.0, Config{5, 2}, order);
+  Eigen::VectorXd early_values(base.size());
+  for (std::size_t j = 0; j < base.size(); ++j) early_values[j] = base[order[j]][0] - 2.0 * base[order[j]][1];
+  const Vec<3> probe_at(0.1, 0.2, -0.3);
   for (unsigned seed : {1u, 2u, 3u})
     cache.interpolant(support::quadtree_stencil<3>(1, 1.0, seed), Vec<3>::Zero(), 1.0, Config{5, 2}, order);
-  EXPECT_EQ(cache.misses(), 3);
+  EXPECT_EQ(cache.misses(), 4);
   EXPECT_EQ(cache.flushes(), 1);
   EXPECT_LE(cache.size(), 2u);
+  early.fit(early_values);
+  EXPECT_NEAR(early.value_at(probe_at), probe_at[0] - 2.0 * probe_at[1], 1e-12);
   EXPECT_THROW(cache.interpolant(base, Vec<3>::Zero(), 0.0, Config{5, 2}, order), Error);
 }
 
