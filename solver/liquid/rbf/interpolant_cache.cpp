@@ -1,10 +1,8 @@
 #include "liquid/rbf/interpolant_cache.hpp"
 
 #include <cmath>
-#include <numeric>
 
 #include "liquid/core/error.hpp"
-#include "liquid/rbf/weight_cache.hpp"
 
 namespace liquid::rbf {
 
@@ -19,22 +17,12 @@ template <int Dim>
 Interpolant<Dim> InterpolantCache<Dim>::interpolant(std::span<const Vec<Dim>> nodes, const Vec<Dim>& at,
                                                     double h, const Config& config, std::vector<int>& order) {
   LIQUID_VERIFY(h > 0.0 && std::isfinite(h), "interpolant cache needs a positive cell size, got {}", h);
-  // Non-finite coordinates (the direct factorisation reports them) and offsets past 2^14 h (the
-  // canonical order's range) are factorised directly.
-  bool keyable = at.allFinite();
-  for (const auto& x : nodes) keyable = keyable && (x - at).cwiseAbs().maxCoeff() <= 0x1p14 * h;
-  if (!keyable) {
-    order.resize(nodes.size());
-    std::iota(order.begin(), order.end(), 0);
-    bypassed_.fetch_add(1, std::memory_order_relaxed);
-    return Interpolant<Dim>(nodes, config);
-  }
   canonical_order<Dim>(nodes, at, h, order);
   thread_local std::vector<Vec<Dim>> sorted;
   sorted.resize(nodes.size());
   for (std::size_t j = 0; j < nodes.size(); ++j) sorted[j] = nodes[order[j]];
   const ShapeKey key = shape_key<Dim>(sorted, at, h, quantum_, config);
-  if (key.empty()) {
+  if (key.empty()) {  // off the quantum, too far or not finite: factorised directly (which reports NaN)
     bypassed_.fetch_add(1, std::memory_order_relaxed);
     return Interpolant<Dim>(sorted, config);
   }

@@ -1,7 +1,10 @@
 #include "liquid/rbf/shape_key.hpp"
 
+#include <algorithm>
+#include <array>
 #include <bit>
 #include <cmath>
+#include <numeric>
 
 namespace liquid::rbf {
 
@@ -52,6 +55,29 @@ void shape_offsets(const ShapeKey& key, int n_nodes, double quantum, std::vector
       out[j][k] = static_cast<double>(key.words[first + static_cast<std::size_t>(Dim) * j + k]) * quantum;
 }
 
+template <int Dim>
+void canonical_order(std::span<const Vec<Dim>> nodes, const Vec<Dim>& at, double h, std::vector<int>& order) {
+  using Key = std::array<std::int64_t, Dim + 1>;
+  thread_local std::vector<Key> keys;
+  keys.resize(nodes.size());
+  for (std::size_t j = 0; j < nodes.size(); ++j) {
+    Key& k = keys[j];
+    k.fill(0);
+    for (int d = 0; d < Dim; ++d) {
+      const double units = (nodes[j][d] - at[d]) / h;
+      // Saturated, so that the squares below stay within 64 bits (Dim * 2^60).
+      const double bounded = std::isfinite(units) ? std::clamp(units, -0x1p14, 0x1p14) : 0.0;
+      k[d + 1] = std::llround(bounded * 0x1p16);
+      k[0] += k[d + 1] * k[d + 1];
+    }
+  }
+  order.resize(nodes.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return keys[a] < keys[b]; });
+}
+
+template void canonical_order<2>(std::span<const Vec<2>>, const Vec<2>&, double, std::vector<int>&);
+template void canonical_order<3>(std::span<const Vec<3>>, const Vec<3>&, double, std::vector<int>&);
 template ShapeKey shape_key<2>(std::span<const Vec<2>>, const Vec<2>&, double, double, const Config&);
 template ShapeKey shape_key<3>(std::span<const Vec<3>>, const Vec<3>&, double, double, const Config&);
 template void shape_offsets<2>(const ShapeKey&, int, double, std::vector<Vec<2>>&);

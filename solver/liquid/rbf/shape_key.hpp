@@ -40,6 +40,14 @@ template <int Dim>
 ShapeKey shape_key(std::span<const Vec<Dim>> nodes, const Vec<Dim>& at, double h, double quantum,
                    const Config& config);
 
+/// A canonical order of stencil nodes, so that congruent stencils gathered in different orders
+/// share a cache entry: by squared distance from `at`, ties by offset, on offsets rounded to
+/// 2^-16 h (exact for dyadic layouts). Offsets beyond 2^14 h are taken as 2^14 h and non-finite
+/// ones as 0 (such stencils get no key anyway), so any input gives a valid order. On return
+/// `order[j]` is the index in `nodes` of the j-th node; the sort is stable.
+template <int Dim>
+void canonical_order(std::span<const Vec<Dim>> nodes, const Vec<Dim>& at, double h, std::vector<int>& order);
+
 /// The offsets (units of h, from `at`) that a key of `n_nodes` nodes stands for, in its order.
 template <int Dim>
 void shape_offsets(const ShapeKey& key, int n_nodes, double quantum, std::vector<Vec<Dim>>& out);

@@ -1,9 +1,7 @@
 #include "liquid/rbf/weight_cache.hpp"
 
 #include <algorithm>
-#include <array>
 #include <cmath>
-#include <numeric>
 
 #include "liquid/core/error.hpp"
 
@@ -56,27 +54,7 @@ void WeightCache<Dim>::clear() {
   bypassed_ = 0;
 }
 
-template <int Dim>
-void canonical_order(std::span<const Vec<Dim>> nodes, const Vec<Dim>& at, double h, std::vector<int>& order) {
-  using Key = std::array<std::int64_t, Dim + 1>;
-  thread_local std::vector<Key> keys;
-  keys.resize(nodes.size());
-  for (std::size_t j = 0; j < nodes.size(); ++j) {
-    Key& k = keys[j];
-    k.fill(0);
-    for (int d = 0; d < Dim; ++d) {
-      k[d + 1] = std::llround((nodes[j][d] - at[d]) / h * 0x1p16);
-      k[0] += k[d + 1] * k[d + 1];
-    }
-  }
-  order.resize(nodes.size());
-  std::iota(order.begin(), order.end(), 0);
-  std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return keys[a] < keys[b]; });
-}
-
 template class WeightCache<2>;
 template class WeightCache<3>;
-template void canonical_order<2>(std::span<const Vec<2>>, const Vec<2>&, double, std::vector<int>&);
-template void canonical_order<3>(std::span<const Vec<3>>, const Vec<3>&, double, std::vector<int>&);
 
 }  // namespace liquid::rbf

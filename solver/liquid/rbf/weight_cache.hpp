@@ -41,11 +41,4 @@ class WeightCache {
   std::atomic<long> bypassed_{0};
 };
 
-/// A canonical order of stencil nodes, so that congruent stencils gathered in different orders
-/// share a cache entry: by squared distance from `at`, ties by offset, on offsets rounded to
-/// 2^-16 h (exact for dyadic layouts; squares fit in 64 bits for offsets up to 2^14 h). On return
-/// `order[j]` is the index in `nodes` of the j-th node; the sort is stable.
-template <int Dim>
-void canonical_order(std::span<const Vec<Dim>> nodes, const Vec<Dim>& at, double h, std::vector<int>& order);
-
 }  // namespace liquid::rbf

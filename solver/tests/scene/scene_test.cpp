@@ -5,6 +5,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 
 #include "liquid/core/error.hpp"
 #include "liquid/io/archive.hpp"
@@ -66,6 +67,20 @@ TEST(Scene, ValuesAndOverridesReachTheSolverOptions) {
   bad.method = "pic";
   bad.adaptive = 1;
   EXPECT_THROW(apply_overrides<2>(bad, s), Error);
+  EXPECT_TRUE(s.pic.rbf.share_factors);  // the default
+  {
+    // [solver] share_factors = false reaches the transfer's options.
+    std::ifstream in(find_scene("drop-2d"));
+    std::stringstream text;
+    text << in.rdbuf();
+    std::string toml = text.str();
+    const auto at = toml.find("[solver]");
+    toml = at == std::string::npos ? toml + "\n[solver]\nshare_factors = false\n"
+                                   : toml.insert(at + 8, "\nshare_factors = false");
+    const std::string path = ::testing::TempDir() + "/own-factors.toml";
+    std::ofstream(path) << toml;
+    EXPECT_FALSE(load_scene<2>(path).pic.rbf.share_factors);
+  }
   const Scene<3> obstacles = load_scene<3>(find_scene("dam-break-obstacles-3d"));
   ASSERT_TRUE(static_cast<bool>(obstacles.pic.solid));
   EXPECT_LT(obstacles.pic.solid(Vec<3>(0.6, 0.9, 0.3)), 0.0);  // inside the pillar (infinite along y)
