@@ -144,5 +144,31 @@ TEST(InterpolantCache, EntriesDependOnTheKeyAloneAndOffQuantumStencilsBypass) {
   EXPECT_THROW(cache.interpolant(base, Vec<3>::Zero(), 0.0, Config{5, 2}, order), Error);
 }
 
+// A node farther than 2^14 h, or not finite, gets no key: the nodes are factorised directly (a NaN
+// is reported, never a cache entry), and the order handed back is still a permutation. Under UBSan
+// this also checks that the canonical order's squared offsets do not overflow.
+TEST(InterpolantCache, FarOrNonFiniteNodesAreFactorisedDirectly) {
+  InterpolantCache<2> cache;
+  std::vector<Vec<2>> nodes = support::quadtree_stencil<2>(1, 1.0, 4u);
+  nodes.push_back(Vec<2>(3e5, 0.0));
+  std::vector<int> order;
+  const auto is_permutation = [&] {
+    std::vector<int> sorted = order;
+    std::sort(sorted.begin(), sorted.end());
+    std::vector<int> ids(nodes.size());
+    std::iota(ids.begin(), ids.end(), 0);
+    return sorted == ids;
+  };
+  cache.interpolant(nodes, Vec<2>::Zero(), 1.0, Config{5, 2}, order);
+  EXPECT_TRUE(is_permutation());
+  EXPECT_EQ(cache.bypassed(), 1);
+  nodes.back() = Vec<2>(std::nan(""), 0.0);
+  EXPECT_EQ(cache.interpolant(nodes, Vec<2>::Zero(), 1.0, Config{5, 2}, order).status().info,
+            Info::non_finite);
+  EXPECT_TRUE(is_permutation());
+  EXPECT_EQ(cache.bypassed(), 2);
+  EXPECT_EQ(cache.size(), 0u);
+}
+
 }  // namespace
 }  // namespace liquid::rbf
