@@ -6,7 +6,8 @@
 // Transfers run on one uniform tree per dimension (2D level 8, 3D level 5: 65k and 32k cells) with
 // 2^d jittered Halton particles per cell, so every method sees the same data. Methods: 0 rbf
 // (paper), 1 cubic mls, 2 linear fit, 3 PIC (multilinear), 4 APIC, 5 rbf with each cell's own
-// factorisation (share_factors = false; face -> particle only).
+// factorisation (share_factors = false; face -> particle only), 6 rbf with the full Hager-Higham
+// condition estimate (particle -> face only; the default takes two probes).
 #include <benchmark/benchmark.h>
 
 #include <memory>
@@ -20,7 +21,8 @@
 namespace liquid {
 namespace {
 
-const char* kMethodNames[] = {"rbf", "mls", "linear", "pic", "apic", "rbf, own factors"};
+const char* kMethodNames[] = {
+    "rbf", "mls", "linear", "pic", "apic", "rbf, own factors", "rbf, full condition estimate"};
 
 template <int Dim>
 struct Scene {
@@ -52,9 +54,10 @@ Scene<Dim>& scene() {
 }
 
 TransferOptions scattered(int method) {
-  if (method == 5) {
+  if (method == 5 || method == 6) {
     TransferOptions o = TransferOptions::paper_rbf();
-    o.share_factors = false;
+    if (method == 5) o.share_factors = false;
+    if (method == 6) o.condition_estimate = rbf::ConditionEstimate::hager_higham;
     return o;
   }
   return method == 0 ? TransferOptions::paper_rbf()
@@ -67,7 +70,7 @@ void BM_ToFaces(benchmark::State& state) {
   Scene<Dim>& s = scene<Dim>();
   FaceValues out;
   for (auto _ : state) {
-    if (method < 3)
+    if (method < 3 || method == 6)
       particles_to_faces<Dim>(s.graph, s.particles, s.bins, scattered(method), out);
     else
       linear_to_faces<Dim>(s.graph, *s.lattice, s.particles, s.bins,
@@ -142,8 +145,8 @@ void BM_Binning(benchmark::State& state) {
 
 BENCHMARK_TEMPLATE(BM_Binning, 2)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK_TEMPLATE(BM_Binning, 3)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK_TEMPLATE(BM_ToFaces, 2)->DenseRange(0, 4)->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK_TEMPLATE(BM_ToFaces, 3)->DenseRange(0, 4)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK_TEMPLATE(BM_ToFaces, 2)->DenseRange(0, 4)->Arg(6)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK_TEMPLATE(BM_ToFaces, 3)->DenseRange(0, 4)->Arg(6)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK_TEMPLATE(BM_ToParticles, 2)->DenseRange(0, 5)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK_TEMPLATE(BM_ToParticles, 3)->DenseRange(0, 5)->Unit(benchmark::kMillisecond)->UseRealTime();
 

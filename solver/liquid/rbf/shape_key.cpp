@@ -18,7 +18,7 @@ std::size_t ShapeKeyHash::operator()(const ShapeKey& k) const {
 }
 
 namespace {
-constexpr int n_header_words = 6;  // the kernel settings and the node count
+constexpr int n_header_words = 7;  // the kernel settings and the node count
 }
 
 template <int Dim>
@@ -31,6 +31,7 @@ ShapeKey shape_key(std::span<const Vec<Dim>> nodes, const Vec<Dim>& at, double h
   key.words.push_back(std::bit_cast<std::int64_t>(config.rank_tolerance));
   key.words.push_back(std::bit_cast<std::int64_t>(config.max_condition));
   key.words.push_back(std::bit_cast<std::int64_t>(config.coincidence_tolerance));
+  key.words.push_back(static_cast<std::int64_t>(config.condition_estimate));
   key.words.push_back(static_cast<std::int64_t>(nodes.size()));
   for (const auto& x : nodes) {
     for (int k = 0; k < Dim; ++k) {

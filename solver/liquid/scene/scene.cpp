@@ -566,10 +566,10 @@ Scene<Dim> load_scene(const std::string& path) {
   static const toml::table empty;
   {
     const toml::table* t = top.table("solver");
-    const TableReader r(
-        t ? *t : empty, path, "solver",
-        {"method", "adaptive", "flip", "integrator", "reseed", "reseed_mode", "gravity", "extrapolation",
-         "advect_cfl", "surface", "surface_radius", "projection", "min_face_mass", "share_factors"});
+    const TableReader r(t ? *t : empty, path, "solver",
+                        {"method", "adaptive", "flip", "integrator", "reseed", "reseed_mode", "gravity",
+                         "extrapolation", "advect_cfl", "surface", "surface_radius", "projection",
+                         "min_face_mass", "share_factors", "condition_estimate"});
     const std::string method = r.choice("method", {"rbf", "pic", "flip", "apic", "sph"}, std::string("rbf"));
     s.sph = method == "sph";
     o.transfer = parse_pic_transfer(s.sph ? "rbf" : method);
@@ -585,6 +585,10 @@ Scene<Dim> load_scene(const std::string& path) {
     o.reseed = r.boolean("reseed", true);
     o.reseeding.keep = r.choice("reseed_mode", {"replace", "keep"}, std::string("replace")) == "keep";
     o.rbf.share_factors = r.boolean("share_factors", true);
+    o.rbf.condition_estimate =
+        r.choice("condition_estimate", {"probes", "hager-higham"}, std::string("probes")) == "probes"
+            ? rbf::ConditionEstimate::probes
+            : rbf::ConditionEstimate::hager_higham;
     o.gravity = r.vec<Dim>("gravity", PicOptions<Dim>::default_gravity());
     o.extrapolation_layers = static_cast<int>(r.integer_in("extrapolation", 1, 64, 4));
     o.advect_cfl = r.positive("advect_cfl", 1.0);

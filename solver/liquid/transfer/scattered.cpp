@@ -26,6 +26,12 @@ int TransferOptions::node_cap(int dim) const {
   return max_nodes > 0 ? max_nodes : 4 * rbf::n_polynomial_terms(dim, degree);
 }
 
+rbf::Config TransferOptions::rbf_config() const {
+  rbf::Config config{exponent, degree};
+  config.condition_estimate = condition_estimate;
+  return config;
+}
+
 std::string TransferOptions::describe() const {
   if (scheme == Scheme::rbf)
     return fmt::format("RBF (PHS r^{} + degree {}, {} ring{}{})", exponent, degree, rings,
@@ -200,7 +206,7 @@ TransferReport particles_to_faces(const CellGraph<Dim>& graph, const Particles<D
                 "particles_to_faces: bins hold {} particles, there are {}", bins.n_particles(),
                 particles.size());
   out.reset(graph.face_capacity());
-  const rbf::Config config{options.exponent, options.degree};
+  const rbf::Config config = options.rbf_config();
   const int node_cap = options.node_cap(Dim);
   TransferReport total;
   parallel_for(
@@ -269,7 +275,7 @@ TransferReport faces_to_points(const CellGraph<Dim>& graph, std::span<const doub
                 known.size(), u.size());
   LIQUID_VERIFY(bins.n_particles() == static_cast<int>(x.size()) && v.size() == x.size(),
                 "faces_to_points: {} points, {} binned, {} outputs", x.size(), bins.n_particles(), v.size());
-  const rbf::Config config{options.exponent, options.degree};
+  const rbf::Config config = options.rbf_config();
   std::unique_ptr<rbf::InterpolantCache<Dim>> cache;
   if (options.share_factors) cache = std::make_unique<rbf::InterpolantCache<Dim>>();
   // The cells that hold points, in id order.

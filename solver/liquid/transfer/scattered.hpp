@@ -31,6 +31,7 @@
 
 #include "liquid/particles/bins.hpp"
 #include "liquid/particles/particles.hpp"
+#include "liquid/rbf/weights.hpp"
 #include "liquid/transfer/face_values.hpp"
 #include "liquid/tree/cell_graph.hpp"
 
@@ -57,7 +58,13 @@ struct TransferOptions {
   /// that layout of faces (rbf::InterpolantCache); false factorises every cell's own. The two agree
   /// to round-off.
   bool share_factors = true;
-  int node_cap(int dim) const;  ///< the limit max_nodes stands for (0: none)
+  /// RBF: how each saddle system's condition is estimated before it is accepted (past 1e14 a
+  /// stencil falls back to inverse-distance weights). The two fixed probes cost one solve where the
+  /// full Hager-Higham ascent took up to ten: particle -> face spent a third of its time there. Both
+  /// accept the same stencils in every run measured, so the results are the same bits.
+  rbf::ConditionEstimate condition_estimate = rbf::ConditionEstimate::probes;
+  int node_cap(int dim) const;     ///< the limit max_nodes stands for (0: none)
+  rbf::Config rbf_config() const;  ///< the RBF kernel settings above
 
   /// The paper's transfer: PHS r^5 with polynomials of degree 2, the adjacent/incident cells (plus
   /// wall_rings at walls).

@@ -65,7 +65,7 @@ template <int Dim>
 void FaceVelocityField<Dim>::prepare(CellId c, CellInterpolants& out) const {
   transfer::FaceStencil<Dim> stencil;
   transfer::gather_face_stencil<Dim>(*graph_, c, options_.rings, u_, known_, stencil);
-  const rbf::Config config{options_.exponent, options_.degree};
+  const rbf::Config config = options_.rbf_config();
   for (int axis = 0; axis < Dim; ++axis) {
     const auto& nodes = stencil.nodes[axis];
     const Eigen::Map<const Eigen::VectorXd> values(stencil.values[axis].data(),
