@@ -88,6 +88,9 @@ void add_study_flags(CLI::App& app, StudyFlags& f) {
   app.add_option("--stencil-growth", f.stencil_growth,
                  "irregular RBF-FD stencils grow to G x (polynomial terms) + 1 nodes")
       ->check(CLI::Range(1.0, 8.0));
+  app.add_option("--ring-cap", f.ring_cap,
+                 "ring stencils keep at most C x (their target size) nodes, the nearest; 0: whole rings")
+      ->check(CLI::Range(0.0, 8.0));
   app.add_option("--rows", f.rows,
                  "Poisson studies: refine the first row's tree uniformly (the paper's recursive subdivision) "
                  "or rebuild each row's tree by its rule")
@@ -109,8 +112,8 @@ void add_study_flags(CLI::App& app, StudyFlags& f) {
 CaseOptions case_options(const StudyFlags& f, const CaseInfo& info) {
   std::vector<std::string> refused;
   for (Option o : {Option::levels, Option::max_jump, Option::solver, Option::stencil, Option::rbf_exponent,
-                   Option::rbf_degree, Option::gradient_degree, Option::stencil_growth, Option::rows,
-                   Option::nullspace, Option::tolerance, Option::perturb, Option::trees})
+                   Option::rbf_degree, Option::gradient_degree, Option::stencil_growth, Option::ring_cap,
+                   Option::rows, Option::nullspace, Option::tolerance, Option::perturb, Option::trees})
     if (f.given(o) && !info.accepts_option(o)) refused.push_back(flag_of(o));
   if (!refused.empty()) {
     std::vector<std::string> accepted;
@@ -129,6 +132,14 @@ CaseOptions case_options(const StudyFlags& f, const CaseInfo& info) {
   if (f.given(Option::rbf_degree)) o.rbf_degree = f.rbf_degree;
   if (f.given(Option::gradient_degree)) o.gradient_degree = f.gradient_degree;
   if (f.given(Option::stencil_growth)) o.stencil_growth = f.stencil_growth;
+  if (f.given(Option::ring_cap)) {
+    if (f.ring_cap != 0.0 && f.ring_cap < 1.0)
+      throw Error(
+          fmt::format("--ring-cap {} must be 0 (whole rings) or at least 1 (a stencil keeps at least its "
+                      "target size)",
+                      f.ring_cap));
+    o.ring_cap = f.ring_cap;
+  }
   if (f.given(Option::rows)) o.rows = f.rows;
   if (f.given(Option::nullspace)) o.nullspace = f.nullspace;
   if (f.given(Option::tolerance)) o.tolerance = f.tolerance;
@@ -152,6 +163,7 @@ std::string echo(const std::string& case_name, const StudyFlags& f) {
   s += show(Option::rbf_degree, std::to_string(f.rbf_degree));
   s += show(Option::gradient_degree, std::to_string(f.gradient_degree));
   s += show(Option::stencil_growth, fmt::format("{:g}", f.stencil_growth));
+  s += show(Option::ring_cap, fmt::format("{:g}", f.ring_cap));
   s += show(Option::rows, name_of(row_names, f.rows));
   s += show(Option::nullspace, name_of(nullspace_names, f.nullspace));
   s += show(Option::tolerance, fmt::format("{:g}", f.tolerance));

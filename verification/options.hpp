@@ -21,6 +21,7 @@ struct StudyFlags {
   mac::StencilRule stencil = mac::StencilRule::ring;
   int rbf_exponent = 3, rbf_degree = 3, gradient_degree = 3;
   double stencil_growth = 2.0;
+  double ring_cap = 0.0;
   RowProtocol rows = RowProtocol::refine;
   mac::Nullspace nullspace = mac::Nullspace::pin;
   double tolerance = 1e-10;

@@ -25,6 +25,8 @@ const char* flag_of(Option option) {
       return "--gradient-degree";
     case Option::stencil_growth:
       return "--stencil-growth";
+    case Option::ring_cap:
+      return "--ring-cap";
     case Option::rows:
       return "--rows";
     case Option::nullspace:

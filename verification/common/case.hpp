@@ -27,6 +27,7 @@ enum class Option {
   rbf_degree,
   gradient_degree,
   stencil_growth,
+  ring_cap,
   rows,
   nullspace,
   tolerance,
@@ -63,6 +64,7 @@ struct CaseOptions {
   std::optional<int> rbf_degree;             ///< --rbf-degree M: their polynomial degree
   std::optional<int> gradient_degree;        ///< --gradient-degree M: degree of face gradients
   std::optional<double> stencil_growth;      ///< --stencil-growth G
+  std::optional<double> ring_cap;            ///< --ring-cap C: ring stencils keep at most C x that size
   std::optional<RowProtocol> rows;           ///< --rows refine|rebuild
   std::optional<mac::Nullspace> nullspace;   ///< --nullspace pin|zero-mean
   std::optional<double> tolerance;           ///< --tolerance T: the solver's relative residual
@@ -94,7 +96,8 @@ inline constexpr const char* kMaxCellsHelp =
 inline const OptionSet poisson_study_options{
     Option::levels,       Option::max_jump,   Option::solver,          Option::stencil,
     Option::rbf_exponent, Option::rbf_degree, Option::gradient_degree, Option::stencil_growth,
-    Option::rows,         Option::nullspace,  Option::tolerance,       Option::perturb};
+    Option::ring_cap,     Option::rows,       Option::nullspace,       Option::tolerance,
+    Option::perturb};
 inline const OptionSet no_options{};
 
 /// A figure the accuracy gate compares with its accepted value in reference/<case>.toml.

@@ -20,6 +20,7 @@ std::vector<double> face_normal_derivative(const CellGraph<Dim>& graph, const Do
   rbf::Config config = options.rbf;
   config.degree = options.gradient_degree;
   const int n_target = stencil_size(Dim, config.degree, options.growth);
+  const int n_cap = options.node_cap(n_target);
   rbf::WeightCache<Dim> weight_cache;
   rbf::WeightCache<Dim>* const cache = options.cache_weights ? (shared ? shared : &weight_cache) : nullptr;
   parallel_for(
@@ -41,7 +42,7 @@ std::vector<double> face_normal_derivative(const CellGraph<Dim>& graph, const Do
         const Vec<Dim> at = graph.face_centre(f);
         const CellId seeds[2] = {g.cell[0], g.cell[1]};
         auto& nodes = scratch.nodes;
-        gather_stencil<Dim>(graph, layout, boundary, seeds, at, options.rule, n_target, nodes);
+        gather_stencil<Dim>(graph, layout, boundary, seeds, at, options.rule, n_target, n_cap, nodes);
         const rbf::Status st =
             stencil_weights<Dim>(nodes, at, rbf::Operator<Dim>::partial(g.axis), config, scratch.w,
                                  scratch.n_retried, cache_for<Dim>(nodes, boundary, cache),

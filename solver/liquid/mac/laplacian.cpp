@@ -98,6 +98,13 @@ RowKind fd_row(const CellGraph<Dim>& graph, const DofLayout<Dim>& layout, const 
   return RowKind::fd;
 }
 
+int PoissonOptions::node_cap(int n_target) const {
+  LIQUID_VERIFY(ring_cap == 0.0 || (ring_cap >= 1.0 && std::isfinite(ring_cap)),
+                "ring_cap {} must be 0 (whole rings) or at least 1", ring_cap);
+  if (rule != StencilRule::ring || ring_cap == 0.0) return 0;
+  return static_cast<int>(std::ceil(ring_cap * n_target));
+}
+
 template <int Dim>
 RowKind rbf_row(const CellGraph<Dim>& graph, const DofLayout<Dim>& layout, const Boundary<Dim>& boundary,
                 CellId c, const PoissonOptions& options, rbf::WeightCache<Dim>* cache,
@@ -106,8 +113,9 @@ RowKind rbf_row(const CellGraph<Dim>& graph, const DofLayout<Dim>& layout, const
   const Vec<Dim> x = graph.centre(c);
   const CellId seed[1] = {c};
   auto& nodes = scratch.nodes;
-  gather_stencil<Dim>(graph, layout, boundary, seed, x, options.rule,
-                      stencil_size(Dim, options.rbf.degree, options.growth), nodes);
+  const int n_target = stencil_size(Dim, options.rbf.degree, options.growth);
+  gather_stencil<Dim>(graph, layout, boundary, seed, x, options.rule, n_target, options.node_cap(n_target),
+                      nodes);
   const double near = 1e-3 * graph.cell_size(c).maxCoeff();
   for (const auto& nd : nodes)
     if (nd.dof < 0 && (nd.x - x).norm() < near) {

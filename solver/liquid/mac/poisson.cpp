@@ -80,6 +80,7 @@ std::vector<Row> laplacian_rows(const CellGraph<Dim>& graph, const PoissonSystem
         ++s.n_rbf_rows;
         if (st.info == rbf::Info::degree_reduced) ++s.n_degree_reduced;
         s.min_degree = std::min(s.min_degree, st.degree_used);
+        s.max_stencil = std::max(s.max_stencil, st.n_nodes);
         if (st.condition > s.worst_condition) s.worst_condition = st.condition, s.worst_condition_cell = c;
       },
       [&](Local& local) {
@@ -90,6 +91,7 @@ std::vector<Row> laplacian_rows(const CellGraph<Dim>& graph, const PoissonSystem
         stats.n_degree_reduced += s.n_degree_reduced;
         stats.n_retried += local.scratch.n_retried;
         stats.min_degree = std::min(stats.min_degree, s.min_degree);
+        stats.max_stencil = std::max(stats.max_stencil, s.max_stencil);
         if (s.worst_condition > stats.worst_condition)
           stats.worst_condition = s.worst_condition, stats.worst_condition_cell = s.worst_condition_cell;
       });

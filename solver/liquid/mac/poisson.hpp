@@ -45,6 +45,7 @@ struct AssemblyStats {
   long n_on_interface = 0;    ///< centres within 1e-3 cell sizes of the interface, set to its value
   long n_cache_hits = 0;      ///< weight lookups the cache served (cache_weights; retries included)
   int min_degree = 99;
+  int max_stencil = 0;           ///< the most nodes of an RBF-FD row
   double worst_condition = 0.0;  ///< of the local RBF systems (cached ones: at unit scale)
   CellId worst_condition_cell = no_cell;
   double seconds = 0.0;

@@ -109,8 +109,9 @@ void candidates(const CellGraph<Dim>& graph, std::span<const CellId> seeds, cons
 template <int Dim>
 void gather_stencil(const CellGraph<Dim>& graph, const DofLayout<Dim>& layout, const Boundary<Dim>& boundary,
                     std::span<const CellId> seeds, const Vec<Dim>& at, StencilRule rule, int n_target,
-                    std::vector<StencilNode<Dim>>& out) {
+                    int n_cap, std::vector<StencilNode<Dim>>& out) {
   LIQUID_ASSERT(!seeds.empty(), "gather_stencil needs a seed cell");
+  LIQUID_ASSERT(n_cap == 0 || n_cap >= n_target, "stencil cap {} below its target {}", n_cap, n_target);
   thread_local std::vector<CellId> cells;
   std::size_t n_core_cells = 0, n_core_nodes = 0;
   candidates(graph, seeds, at, rule, n_target, cells, n_core_cells);
@@ -193,10 +194,11 @@ void gather_stencil(const CellGraph<Dim>& graph, const DofLayout<Dim>& layout, c
     }
     out.swap(kept);
   }
-  // `ring` keeps whole rings; `face_grown` keeps its candidate order (face neighbours first);
-  // `nearest` keeps the nearest nodes, with everything tied with the last kept so that symmetric
-  // layouts stay symmetric.
-  if (rule == StencilRule::ring || static_cast<int>(out.size()) <= n_target) return;
+  // `ring` keeps whole rings (up to n_cap); `face_grown` keeps its candidate order (face neighbours
+  // first); `nearest` keeps the nearest nodes. Both nearest-first cuts keep everything tied with the
+  // last kept node, so that symmetric layouts stay symmetric.
+  const int n_keep = rule == StencilRule::ring ? n_cap : n_target;
+  if (n_keep <= 0 || static_cast<int>(out.size()) <= n_keep) return;
   if (rule == StencilRule::face_grown) {
     if (n_core_cells >= cells.size()) n_core_nodes = out.size();
     out.resize(std::max<std::size_t>(n_target, n_core_nodes));
@@ -205,8 +207,8 @@ void gather_stencil(const CellGraph<Dim>& graph, const DofLayout<Dim>& layout, c
   std::stable_sort(out.begin(), out.end(), [&](const StencilNode<Dim>& a, const StencilNode<Dim>& b) {
     return (a.x - at).squaredNorm() < (b.x - at).squaredNorm();
   });
-  const double cut = (out[n_target - 1].x - at).squaredNorm() * (1.0 + 1e-9);
-  std::size_t keep = n_target;
+  const double cut = (out[n_keep - 1].x - at).squaredNorm() * (1.0 + 1e-9);
+  std::size_t keep = n_keep;
   while (keep < out.size() && (out[keep].x - at).squaredNorm() <= cut) ++keep;
   out.resize(keep);
 }
@@ -252,10 +254,10 @@ rbf::Status stencil_weights(std::vector<StencilNode<Dim>>& nodes, const Vec<Dim>
 }
 
 template void gather_stencil<2>(const CellGraph<2>&, const DofLayout<2>&, const Boundary<2>&,
-                                std::span<const CellId>, const Vec<2>&, StencilRule, int,
+                                std::span<const CellId>, const Vec<2>&, StencilRule, int, int,
                                 std::vector<StencilNode<2>>&);
 template void gather_stencil<3>(const CellGraph<3>&, const DofLayout<3>&, const Boundary<3>&,
-                                std::span<const CellId>, const Vec<3>&, StencilRule, int,
+                                std::span<const CellId>, const Vec<3>&, StencilRule, int, int,
                                 std::vector<StencilNode<3>>&);
 template rbf::Status stencil_weights<2>(std::vector<StencilNode<2>>&, const Vec<2>&, const rbf::Operator<2>&,
                                         const rbf::Config&, std::vector<double>&, long&, rbf::WeightCache<2>*,

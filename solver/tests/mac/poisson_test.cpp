@@ -158,6 +158,46 @@ void inhomogeneous_neumann_quadratic_is_exact() {
             0.1);
 }
 
+// PoissonOptions::ring_cap keeps the nearest nodes of the whole rings: the rows and the face
+// gradients stay exact for quadratics, and no stencil holds more than the cap plus the nodes tied
+// with its last one, where whole rings hold more. It applies to the ring rule alone.
+TEST(Poisson, RingCapBoundsTheStencilsAndKeepsQuadraticsExact) {
+  const CellGraph<3> graph = non_graded<3>(2);
+  PoissonProblem<3> problem;
+  problem.f = quad_laplacian<3>;
+  problem.boundary.levelset = levelset::sphere<3>(Vec<3>::Constant(0.05), 0.7);
+  problem.boundary.dirichlet = quad<3>;
+  PoissonOptions whole, capped;
+  capped.ring_cap = 2.0;
+  const int n = stencil_size(3, whole.rbf.degree, whole.growth);
+  EXPECT_EQ(whole.node_cap(n), 0);
+  EXPECT_EQ(capped.node_cap(n), 2 * n);
+  PoissonOptions nearest = capped;
+  nearest.rule = StencilRule::nearest;
+  EXPECT_EQ(nearest.node_cap(n), 0);
+  PoissonOptions bad = capped;
+  bad.ring_cap = 0.5;
+  EXPECT_THROW(bad.node_cap(n), Error);
+
+  const PoissonSystem<3> a = assemble_poisson<3>(graph, problem, whole);
+  const PoissonSystem<3> b = assemble_poisson<3>(graph, problem, capped);
+  EXPECT_GT(a.stats.max_stencil, 2 * n);
+  EXPECT_LT(b.stats.max_stencil, a.stats.max_stencil);
+  EXPECT_GE(b.stats.max_stencil, 2 * n);
+  EXPECT_LE(b.stats.max_stencil, 2 * n + 48);  // ties: a shell of equidistant nodes (48 at most)
+  EXPECT_EQ(a.stats.n_rbf_rows, b.stats.n_rbf_rows);
+  linalg::Vector p;
+  ASSERT_LT(direct_error_against_quad<3>(graph, b, &p), 1e-9);
+  const auto dn = face_normal_derivative<3>(graph, b, capped, p);
+  double err_grad = 0.0;
+  graph.for_each_face([&](FaceId f) {
+    if (!std::isnan(dn[f]))
+      err_grad =
+          std::max(err_grad, std::abs(dn[f] - quad_gradient<3>(graph.face_centre(f))[graph.face(f).axis]));
+  });
+  EXPECT_LT(err_grad, 1e-7);
+}
+
 TEST(Poisson, InhomogeneousNeumannQuadraticIsExactOnNonGradedQuadtree) {
   inhomogeneous_neumann_quadratic_is_exact<2>();
 }
