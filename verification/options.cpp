@@ -138,6 +138,9 @@ CaseOptions case_options(const StudyFlags& f, const CaseInfo& info) {
           fmt::format("--ring-cap {} must be 0 (whole rings) or at least 1 (a stencil keeps at least its "
                       "target size)",
                       f.ring_cap));
+    if (f.ring_cap != 0.0 && f.given(Option::stencil) && f.stencil != mac::StencilRule::ring)
+      throw Error(fmt::format("--ring-cap limits the ring rule's stencils; --stencil {} takes none",
+                              mac::to_string(f.stencil)));
     o.ring_cap = f.ring_cap;
   }
   if (f.given(Option::rows)) o.rows = f.rows;

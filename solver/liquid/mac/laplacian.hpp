@@ -36,13 +36,8 @@ struct PoissonOptions {
   double growth = 2.0;                   ///< irregular stencils get stencil_size(Dim, degree, growth) nodes
   /// `ring` rule: keep at most ring_cap times that size, the nodes nearest the centre (with every
   /// node tied with the last kept); 0 keeps the whole rings. A study option (liquid-verify
-  /// --ring-cap), measured and not taken: whole rings of the PIC step's 3D T-junctions held 73 nodes
-  /// (median) to 309 where 21 were asked for, and ring_cap = 2 took the quadruple dam break's
-  /// `laplacian` + `project` (finest 5) from 0.082 to 0.040 s a step, but it made the dam break with
-  /// obstacles blow up within 4 steps (not traced; the nearest nodes may crowd onto a finer side,
-  /// the one-sided stencil the ring rule's area count exists to avoid), and it lost accuracy on
-  /// poisson-stencil-rules' 3D rows (p 3.7 times, dp/dn 2.5 times) and in dp/dn on
-  /// poisson-dirichlet-levelset-3d (1.35-1.5 times).
+  /// --ring-cap), measured and not taken: faster in 3D, but a 3D scene blew up with it and the 3D
+  /// studies lost accuracy (README, "How each phase grows with the work").
   double ring_cap = 0.0;
   /// The most nodes a stencil of `n_target` may keep under the rule (0: no limit).
   int node_cap(int n_target) const;

@@ -75,9 +75,9 @@ double probe_condition(const Eigen::PartialPivLU<Eigen::MatrixXd>& lu, const Eig
     probe(i, 1) = (i % 2 == 0 ? 1.0 : -1.0) * (1.0 + ramp);
   }
   const Eigen::Matrix<double, Eigen::Dynamic, 2> image = lu.solve(probe);
+  if (!image.allFinite()) return std::numeric_limits<double>::infinity();
   const double inverse =
       std::max(image.col(0).lpNorm<1>(), 2.0 * image.col(1).lpNorm<1>() / (3.0 * static_cast<double>(n)));
-  if (!std::isfinite(inverse)) return std::numeric_limits<double>::infinity();
   return K.cwiseAbs().colwise().sum().maxCoeff() * inverse;
 }
 }  // namespace

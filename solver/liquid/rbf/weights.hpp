@@ -51,8 +51,8 @@ enum class ConditionEstimate {
   /// Hager's gradient ascent with Higham's alternating probe (Eigen's rcond): up to 10 solves.
   hager_higham,
   /// Hager's first probe and Higham's alternating one, without the ascent: one two-column solve.
-  /// Never above hager_higham's figure, and within a factor 8 of it on the 3D stencils tested;
-  /// the particle -> face transfer, one system per face, spent a third of its time on the ascent.
+  /// Not above hager_higham's figure but for rounding (the ascent starts from the same probe), and
+  /// within a factor 8 of it on the 3D stencils tested.
   probes,
 };
 
@@ -63,6 +63,7 @@ struct Config {
   double rank_tolerance = 1e-9;         ///< relative threshold of the rank test on the polynomial block
   double coincidence_tolerance = 1e-9;  ///< nodes closer than this times R are coincident
   double max_condition = 1e14;          ///< estimated condition number past which a system is refused
+  /// How `max_condition` is checked (the transfers take probes; see TransferOptions).
   ConditionEstimate condition_estimate = ConditionEstimate::hager_higham;
 };
 
@@ -83,7 +84,7 @@ struct Status {
   int n_nodes = 0;
   int degree_requested = 0;
   int degree_used = -1;
-  double condition = 0.0;  ///< 1-norm condition estimate (Config::condition_estimate) of the scaled system
+  double condition = 0.0;         ///< 1-norm condition estimate of the scaled system (see Config)
   bool laplacian_defined = true;  ///< false for s = 1 with a node on the evaluation point
   int node_a = -1, node_b = -1;   ///< the offending pair for coincident_nodes
 

@@ -60,8 +60,8 @@ struct TransferOptions {
   bool share_factors = true;
   /// RBF: how each saddle system's condition is estimated before it is accepted (past 1e14 a
   /// stencil falls back to inverse-distance weights). The two fixed probes cost one solve where the
-  /// full Hager-Higham ascent took up to ten: particle -> face spent a third of its time there. Both
-  /// accept the same stencils in every run measured, so the results are the same bits.
+  /// full Hager-Higham ascent takes up to ten; both accepted the same stencils in every run compared
+  /// (README, "Table 1"), so the results were the same bits.
   rbf::ConditionEstimate condition_estimate = rbf::ConditionEstimate::probes;
   int node_cap(int dim) const;     ///< the limit max_nodes stands for (0: none)
   rbf::Config rbf_config() const;  ///< the RBF kernel settings above

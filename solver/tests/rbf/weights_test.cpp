@@ -192,7 +192,8 @@ TEST(RbfFdWeights, ConditionEstimateTracksTheTrueOneAndRefusesNearSingularSystem
   }
 }
 
-// The two-probe estimate is the start of the full one: never above it, on these stencils within a
+// The two-probe estimate is the start of the full one: not above it (but for rounding; these
+// stencils are well conditioned, so 1e-12 covers it), on these stencils within a
 // factor 10 of it (7.6 at worst, measured) and above the true 2-norm condition over n; it refuses the same
 // near-singular systems, and accepting a system leaves its weights untouched (the estimate decides nothing
 // else).
