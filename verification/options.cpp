@@ -3,6 +3,8 @@
 #include <unistd.h>
 
 #include <charconv>
+#include <cmath>
+#include <cstdlib>
 #include <initializer_list>
 #include <map>
 #include <regex>
@@ -33,6 +35,17 @@ const std::map<std::string, RowProtocol> row_names = names_of({RowProtocol::refi
 const std::map<std::string, mac::Nullspace> nullspace_names{{"pin", mac::Nullspace::pin},
                                                             {"zero-mean", mac::Nullspace::zero_mean}};
 const std::map<std::string, Perturbation> perturb_names{{"first-order", Perturbation::first_order}};
+
+// CLI::Range lets NaN through (every comparison with it is false), so the real-valued flags are
+// checked finite first; text that is no number is left to the conversion's own message.
+const CLI::Validator finite_number(
+    [](std::string& text) {
+      char* end = nullptr;
+      const double v = std::strtod(text.c_str(), &end);
+      if (end == text.c_str() || std::isfinite(v)) return std::string();
+      return "a finite number is needed, got " + text;
+    },
+    "FINITE");
 
 template <class E>
 std::string name_of(const std::map<std::string, E>& names, E value) {
@@ -87,9 +100,11 @@ void add_study_flags(CLI::App& app, StudyFlags& f) {
       ->check(CLI::Range(0, 4));
   app.add_option("--stencil-growth", f.stencil_growth,
                  "irregular RBF-FD stencils grow to G x (polynomial terms) + 1 nodes")
+      ->check(finite_number)
       ->check(CLI::Range(1.0, 8.0));
   app.add_option("--ring-cap", f.ring_cap,
                  "ring stencils keep at most C x (their target size) nodes, the nearest; 0: whole rings")
+      ->check(finite_number)
       ->check(CLI::Range(0.0, 8.0));
   app.add_option("--rows", f.rows,
                  "Poisson studies: refine the first row's tree uniformly (the paper's recursive subdivision) "
@@ -100,6 +115,7 @@ void add_study_flags(CLI::App& app, StudyFlags& f) {
          "pure Neumann Poisson studies: pin one unknown near the centre to the exact value, or zero mean")
       ->transform(CLI::CheckedTransformer(nullspace_names));
   app.add_option("--tolerance", f.tolerance, "relative residual the linear solver must reach")
+      ->check(finite_number)
       ->check(CLI::Range(1e-16, 0.5));
   app.add_option("--perturb", f.perturb, "run a deliberately degraded scheme (first-order)")
       ->transform(CLI::CheckedTransformer(perturb_names));
@@ -133,7 +149,7 @@ CaseOptions case_options(const StudyFlags& f, const CaseInfo& info) {
   if (f.given(Option::gradient_degree)) o.gradient_degree = f.gradient_degree;
   if (f.given(Option::stencil_growth)) o.stencil_growth = f.stencil_growth;
   if (f.given(Option::ring_cap)) {
-    if (f.ring_cap != 0.0 && f.ring_cap < 1.0)
+    if (!(f.ring_cap == 0.0 || f.ring_cap >= 1.0))
       throw Error(
           fmt::format("--ring-cap {} must be 0 (whole rings) or at least 1 (a stencil keeps at least its "
                       "target size)",
@@ -196,6 +212,7 @@ void add_user_poisson_flags(CLI::App& app, UserPoissonArgs& a) {
   app.add_option("--nullspace", a.nullspace, "singular Neumann problems: pin (default) or zero-mean")
       ->transform(CLI::CheckedTransformer(nullspace_names));
   app.add_option("--tolerance", a.tolerance, "relative residual the linear solver must reach (default 1e-10)")
+      ->check(finite_number)
       ->check(CLI::Range(1e-16, 0.5));
   app.add_option("--expect-order", a.expect_order,
                  "P[,G]: exit 1 when the fitted order of p (and of dp/dn) falls below");

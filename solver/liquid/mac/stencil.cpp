@@ -28,6 +28,7 @@ const char* to_string(StencilRule rule) {
 }
 
 int stencil_size(int dim, int degree, double growth) {
+  LIQUID_VERIFY(growth > 0.0 && growth <= 64.0, "stencil growth {} must be in (0, 64]", growth);
   return static_cast<int>(std::ceil(growth * rbf::n_polynomial_terms(dim, degree))) + 1;
 }
 

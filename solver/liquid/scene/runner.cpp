@@ -223,7 +223,7 @@ void apply_overrides(const SceneOverrides& o, Scene<Dim>& scene) {
     scene.time.steps = o.steps;
     scene.time.end = std::numeric_limits<double>::infinity();
   }
-  if (o.until >= 0) {
+  if (!(o.until < 0)) {  // a negative time keeps the scene's end; NaN is refused below
     LIQUID_VERIFY(o.until > 0 && std::isfinite(o.until), "--until {} must be a positive time", o.until);
     scene.time.end = o.until;
     scene.time.steps = -1;

@@ -40,6 +40,11 @@ TEST(WeightCache, MatchesUncachedWeightsAndHitsOnRepeatedLayouts) {
   // Other kernel settings are a different entry.
   ASSERT_TRUE(cache.weights(base, Vec<2>::Zero(), 1.0, Operator<2>::lap(), Config{5, 2}, cached).usable());
   EXPECT_EQ(cache.misses(), 2);
+  // So is another condition estimate alone: an entry's refusal must be the estimate asked for.
+  Config probes{5, 2};
+  probes.condition_estimate = ConditionEstimate::probes;
+  ASSERT_TRUE(cache.weights(base, Vec<2>::Zero(), 1.0, Operator<2>::lap(), probes, cached).usable());
+  EXPECT_EQ(cache.misses(), 3);
 }
 
 TEST(WeightCache, ConsistentUnderOpenMP) {
