@@ -77,13 +77,14 @@ void echo(const Scene<Dim>& s, const RunSettings& settings, bool resumed) {
              o.adaptive ? o.coarse_level : o.fine_level, o.band,
              o.max_jump >= unlimited_jump ? std::string("unlimited") : std::to_string(o.max_jump));
   const bool rbf_transfer = o.transfer == PicTransfer::rbf;
-  fmt::print("  method      {}{}; {}; reseeding {}{}{}\n", to_string(o.transfer),
+  fmt::print("  method      {}{}; {}; reseeding {}{}{}{}\n", to_string(o.transfer),
              o.transfer == PicTransfer::flip ? fmt::format(" (blend {})", o.flip) : "",
              o.integrator == Integrator::rk2 ? "RK2" : "RK3", o.reseed ? "on" : "off",
              rbf_transfer && !o.rbf.share_factors ? "; each cell's own RBF factors" : "",
              rbf_transfer && o.rbf.condition_estimate == rbf::ConditionEstimate::hager_higham
                  ? "; full Hager-Higham condition estimates"
-                 : "");
+                 : "",
+             o.poisson.nullspace == mac::Nullspace::pin ? "; a closed box's PPE pinned at one cell" : "");
   fmt::print("  surface     {}\n",
              o.surface == PicSurface::air_cells
                  ? std::string("p = 0 at the air cells' centres")

@@ -137,10 +137,19 @@ struct PicOptions {
   /// and the face gradients (mac's default of degree 3 is for the convergence studies; see
   /// poisson-rbf-degree). Measured on the still pool (3D, adaptive): laplacian + project 0.24 s a
   /// step with degree 3, 0.042 s with degree 2.
+  /// A box full of liquid (no air cell: a pure Neumann PPE) takes the zero-mean constraint, not the
+  /// pin: on a tree the RBF-FD rows are not D G, so the sum of the rows' right-hand sides that the
+  /// wall fluxes make vanish is not what the matrix's left null vector asks for, and a pin puts
+  /// that mismatch into the pinned cell's equation, which it drops: a point source at the pinned
+  /// cell. Measured on the 3D Taylor-Green cells (adaptive, level 4, second step): the face
+  /// velocity next to the pinned cell, at the box's centre, was 1.00 where the flow has -0.10;
+  /// with zero mean the largest face error of the step is 0.035 (README, "Flow studies").
+  /// `[solver] nullspace = "pin"` in a scene.
   static mac::PoissonOptions paper_poisson() {
     mac::PoissonOptions p;
     p.rbf.degree = 2;
     p.gradient_degree = 2;
+    p.nullspace = mac::Nullspace::zero_mean;  // see above
     return p;
   }
   /// The paper's RBF transfer with particle -> face clamping on. Without it the interpolant's

@@ -569,7 +569,7 @@ Scene<Dim> load_scene(const std::string& path) {
     const TableReader r(t ? *t : empty, path, "solver",
                         {"method", "adaptive", "flip", "integrator", "reseed", "reseed_mode", "gravity",
                          "extrapolation", "advect_cfl", "surface", "surface_radius", "projection",
-                         "min_face_mass", "share_factors", "condition_estimate"});
+                         "min_face_mass", "share_factors", "condition_estimate", "nullspace"});
     const std::string method = r.choice("method", {"rbf", "pic", "flip", "apic", "sph"}, std::string("rbf"));
     s.sph = method == "sph";
     o.transfer = parse_pic_transfer(s.sph ? "rbf" : method);
@@ -589,6 +589,9 @@ Scene<Dim> load_scene(const std::string& path) {
         r.choice("condition_estimate", {"probes", "hager-higham"}, std::string("probes")) == "probes"
             ? rbf::ConditionEstimate::probes
             : rbf::ConditionEstimate::hager_higham;
+    o.poisson.nullspace = r.choice("nullspace", {"zero-mean", "pin"}, std::string("zero-mean")) == "pin"
+                              ? mac::Nullspace::pin
+                              : mac::Nullspace::zero_mean;
     o.gravity = r.vec<Dim>("gravity", PicOptions<Dim>::default_gravity());
     o.extrapolation_layers = static_cast<int>(r.integer_in("extrapolation", 1, 64, 4));
     o.advect_cfl = r.positive("advect_cfl", 1.0);

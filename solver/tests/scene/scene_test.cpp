@@ -69,21 +69,24 @@ TEST(Scene, ValuesAndOverridesReachTheSolverOptions) {
   EXPECT_THROW(apply_overrides<2>(bad, s), Error);
   EXPECT_TRUE(s.pic.rbf.share_factors);  // the defaults
   EXPECT_EQ(s.pic.rbf.condition_estimate, rbf::ConditionEstimate::probes);
+  EXPECT_EQ(s.pic.poisson.nullspace, mac::Nullspace::zero_mean);
   {
     // [solver] share_factors = false and condition_estimate = "hager-higham" reach the transfer's
-    // options.
+    // options, and nullspace = "pin" the PPE's.
     std::ifstream in(find_scene("drop-2d"));
     std::stringstream text;
     text << in.rdbuf();
     std::string toml = text.str();
     const auto at = toml.find("[solver]");
-    const std::string keys = "\nshare_factors = false\ncondition_estimate = \"hager-higham\"";
+    const std::string keys =
+        "\nshare_factors = false\ncondition_estimate = \"hager-higham\"\nnullspace = \"pin\"";
     toml = at == std::string::npos ? toml + "\n[solver]" + keys + "\n" : toml.insert(at + 8, keys);
     const std::string path = ::testing::TempDir() + "/own-factors.toml";
     std::ofstream(path) << toml;
     const Scene<2> own = load_scene<2>(path);
     EXPECT_FALSE(own.pic.rbf.share_factors);
     EXPECT_EQ(own.pic.rbf.condition_estimate, rbf::ConditionEstimate::hager_higham);
+    EXPECT_EQ(own.pic.poisson.nullspace, mac::Nullspace::pin);
   }
   const Scene<3> obstacles = load_scene<3>(find_scene("dam-break-obstacles-3d"));
   ASSERT_TRUE(static_cast<bool>(obstacles.pic.solid));
