@@ -36,11 +36,22 @@ double affine_energy(const AdaptivePic<Dim>& sim, std::span<const double> w) {
   return particle_affine_energy<Dim>(RegularLattice<Dim>(sim.graph()), p, p.field(c), w);
 }
 
+template <int Dim>
+double twice_kinetic_energy(const AdaptivePic<Dim>& sim, double volume) {
+  const Particles<Dim>& p = sim.particles();
+  const std::vector<double> w = particle_volumes<Dim>(sim.graph(), p.x, volume);
+  double sum = 0.0;
+  for (int i = 0; i < p.size(); ++i) sum += w[i] * p.v[i].squaredNorm();
+  return sum + 2.0 * affine_energy<Dim>(sim, w);
+}
+
 template std::vector<double> particle_volumes<2>(const CellGraph<2>&, std::span<const Vec<2>>, double,
                                                  double*);
 template std::vector<double> particle_volumes<3>(const CellGraph<3>&, std::span<const Vec<3>>, double,
                                                  double*);
 template double affine_energy<2>(const AdaptivePic<2>&, std::span<const double>);
 template double affine_energy<3>(const AdaptivePic<3>&, std::span<const double>);
+template double twice_kinetic_energy<2>(const AdaptivePic<2>&, double);
+template double twice_kinetic_energy<3>(const AdaptivePic<3>&, double);
 
 }  // namespace liquid::verification

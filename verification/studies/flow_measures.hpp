@@ -1,6 +1,7 @@
 #pragma once
 // Measures of a particle flow shared by the flow cases (kinetic-energy, vorticity).
 
+#include <cmath>
 #include <span>
 #include <vector>
 
@@ -52,5 +53,20 @@ std::vector<double> particle_volumes(const CellGraph<Dim>& graph, std::span<cons
 /// other transfers, whose particles carry no affine part.
 template <int Dim>
 double affine_energy(const AdaptivePic<Dim>& sim, std::span<const double> w);
+
+/// Twice the kinetic energy of a box of volume `volume` full of liquid, from the particles (each
+/// weighing its share, particle_volumes), APIC's affine part included.
+template <int Dim>
+double twice_kinetic_energy(const AdaptivePic<Dim>& sim, double volume);
+
+/// The Taylor-Green cells u = (sin x cos y, -cos x sin y) on [0, pi]^2, an exact steady inviscid
+/// flow with free-slip walls; in 3D the same cells with w = 0 (independent of z).
+template <int Dim>
+Vec<Dim> taylor_green(const Vec<Dim>& x) {
+  Vec<Dim> u = Vec<Dim>::Zero();
+  u[0] = std::sin(x[0]) * std::cos(x[1]);
+  u[1] = -std::cos(x[0]) * std::sin(x[1]);
+  return u;
+}
 
 }  // namespace liquid::verification

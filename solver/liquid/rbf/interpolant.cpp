@@ -1,6 +1,8 @@
 #include "liquid/rbf/interpolant.hpp"
 
 #include <cmath>
+#include <limits>
+#include <mutex>
 #include <optional>
 
 #include "liquid/core/error.hpp"
@@ -15,6 +17,8 @@ struct Interpolant<Dim>::Factors {
   double radius = 1.0;
   Status status;
   std::optional<detail::SaddleSystem<Dim>> system;
+  mutable std::once_flag cell_lebesgue_once;
+  mutable double cell_lebesgue = std::numeric_limits<double>::quiet_NaN();
 };
 
 template <int Dim>
@@ -137,6 +141,41 @@ Eigen::MatrixXd Interpolant<Dim>::gradient(const Vec<Dim>& x) const {
   for (int t = 0; t < system.n_terms; ++t)
     for (int k = 0; k < Dim; ++k) out.row(k) += system.basis.derivative(t, k, z) * coefficients_.row(n + t);
   return out / (factors_->radius * scale_);
+}
+
+template <int Dim>
+double Interpolant<Dim>::lebesgue(std::span<const Vec<Dim>> points) const {
+  LIQUID_VERIFY(status().usable(), "RBF interpolant unusable: {}", status().describe());
+  const int n = n_nodes();
+  const auto& system = *factors_->system;
+  const int size = n + system.n_terms;
+  // The saddle matrix is symmetric, so the cardinal functions' values at x are the first n entries
+  // of its inverse applied to (phi(|x - x_j|), p_t(x)).
+  Eigen::MatrixXd rhs(size, static_cast<Eigen::Index>(points.size()));
+  for (std::size_t k = 0; k < points.size(); ++k) {
+    const Vec<Dim> z = unit(points[k]);
+    for (int j = 0; j < n; ++j) rhs(j, k) = system.kernel.value((z - factors_->nodes[j]).norm());
+    for (int t = 0; t < system.n_terms; ++t) rhs(n + t, k) = system.basis.value(t, z);
+  }
+  const Eigen::MatrixXd w = system.solve(rhs);
+  double largest = 0.0;
+  for (Eigen::Index k = 0; k < w.cols(); ++k) largest = std::max(largest, w.col(k).head(n).cwiseAbs().sum());
+  return largest;
+}
+
+template <int Dim>
+double Interpolant<Dim>::cell_lebesgue() const {
+  std::call_once(factors_->cell_lebesgue_once, [&] {
+    std::vector<Vec<Dim>> lattice;
+    constexpr int count = Dim == 2 ? 9 : 27;
+    for (int k = 0; k < count; ++k) {
+      Vec<Dim> u;
+      for (int a = 0, r = k; a < Dim; ++a, r /= 3) u[a] = 0.5 * (r % 3) - 0.5;
+      lattice.push_back(origin_ + scale_ * u);
+    }
+    factors_->cell_lebesgue = lebesgue(lattice);
+  });
+  return factors_->cell_lebesgue;
 }
 
 template class Interpolant<2>;

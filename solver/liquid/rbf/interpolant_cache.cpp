@@ -24,7 +24,9 @@ Interpolant<Dim> InterpolantCache<Dim>::interpolant(std::span<const Vec<Dim>> no
   const ShapeKey key = shape_key<Dim>(sorted, at, h, quantum_, config);
   if (key.empty()) {  // off the quantum, too far or not finite: factorised directly (which reports NaN)
     bypassed_.fetch_add(1, std::memory_order_relaxed);
-    return Interpolant<Dim>(sorted, config);
+    // In the entries' frame (offsets from `at` in units of h), so that cell_lebesgue() reads the cell.
+    for (auto& x : sorted) x = (x - at) / h;
+    return Interpolant<Dim>(Interpolant<Dim>::factorise(sorted, config), at, h);
   }
   auto entry = map_.template find_or_make<Dim>(
       key, static_cast<int>(nodes.size()), quantum_,

@@ -147,6 +147,59 @@ TEST(InterpolantCache, EntriesDependOnTheKeyAloneAndOffQuantumStencilsBypass) {
 // A node farther than 2^14 h, or not finite, gets no key: the nodes are factorised directly (a NaN
 // is reported, never a cache entry), and the order handed back is still a permutation. Under UBSan
 // this also checks that the canonical order's squared offsets do not overflow.
+// The Lebesgue function: 1 at the nodes (the cardinal functions are 0 or 1 there), at least 1
+// anywhere (they sum to 1, constants being reproduced), small on a balanced stencil and large on a
+// one-sided, nearly unisolvent one; cell_lebesgue() is lebesgue() over the cell's 3^Dim lattice,
+// shared by interpolants on the same factors, and reads the cell the same way when the cache
+// bypasses a stencil.
+TEST(RbfInterpolant, LebesgueConstantBoundsHowErrorsGrow) {
+  // A 5 x 5 lattice of spacing 1 around the origin, and the unit cell at its centre.
+  std::vector<Vec<2>> lattice;
+  for (int i = -2; i <= 2; ++i)
+    for (int j = -2; j <= 2; ++j) lattice.push_back(Vec<2>(i, j));
+  const Interpolant<2> balanced(lattice, Config{5, 2});
+  ASSERT_TRUE(balanced.status().usable());
+  EXPECT_NEAR(balanced.lebesgue(lattice), 1.0, 1e-9);
+  std::vector<Vec<2>> cell;
+  for (int k = 0; k < 9; ++k) cell.push_back(Vec<2>(0.5 * (k % 3) - 0.5, 0.5 * (k / 3) - 0.5));
+  const double inside = balanced.lebesgue(cell);
+  EXPECT_GE(inside, 1.0 - 1e-12);
+  EXPECT_LT(inside, 3.0);
+  // The same lattice evaluated far outside its nodes: extrapolation amplifies.
+  EXPECT_GT(balanced.lebesgue(std::vector<Vec<2>>{Vec<2>(6.0, 6.0)}), 10.0);
+  // Seven nodes for degree 2's six terms, all on one side of the cell: nearly unisolvent.
+  const std::vector<Vec<2>> one_sided{Vec<2>(0, 0), Vec<2>(1, 0), Vec<2>(2, 0),    Vec<2>(0, 1),
+                                      Vec<2>(1, 1), Vec<2>(0, 2), Vec<2>(2.0, 1.5)};
+  const Interpolant<2> lopsided(one_sided, Config{5, 2});
+  ASSERT_TRUE(lopsided.status().usable());
+  ASSERT_EQ(lopsided.status().degree_used, 2);
+  std::vector<Vec<2>> far_cell;
+  for (const auto& x : cell) far_cell.push_back(x + Vec<2>(-1.0, -1.0));
+  EXPECT_GT(lopsided.lebesgue(far_cell), 5 * inside);
+
+  // cell_lebesgue(): through the cache (the cell centre and size as frame), shared, and over the
+  // same cell when the cache bypasses the stencil (off the quantum: the nodes shifted by 1e-3 h).
+  InterpolantCache<2> cache;
+  std::vector<int> order;
+  const Vec<2> centre(10.0, -4.0);
+  const double h = 0.25;
+  std::vector<Vec<2>> nodes;
+  for (const auto& x : lattice) nodes.push_back(centre + h * x);
+  const Interpolant<2> a = cache.interpolant(nodes, centre, h, Config{5, 2}, order);
+  const Interpolant<2> b = cache.interpolant(nodes, centre, h, Config{5, 2}, order);
+  EXPECT_EQ(cache.misses(), 1);
+  EXPECT_NEAR(a.cell_lebesgue(), inside, 1e-9);
+  EXPECT_EQ(b.cell_lebesgue(), a.cell_lebesgue());
+  std::vector<Vec<2>> shifted_nodes;
+  for (const auto& x : nodes) shifted_nodes.push_back(x + Vec<2>(1e-3 * h, 0.0));
+  const Interpolant<2> bypassed = cache.interpolant(shifted_nodes, centre, h, Config{5, 2}, order);
+  EXPECT_EQ(cache.bypassed(), 1);
+  std::vector<Vec<2>> world_cell;
+  for (const auto& x : cell) world_cell.push_back(centre + h * x);
+  const Interpolant<2> world(shifted_nodes, Config{5, 2});
+  EXPECT_NEAR(bypassed.cell_lebesgue(), world.lebesgue(world_cell), 1e-9);
+}
+
 TEST(InterpolantCache, FarOrNonFiniteNodesAreFactorisedDirectly) {
   InterpolantCache<2> cache;
   std::vector<Vec<2>> nodes = support::quadtree_stencil<2>(1, 1.0, 4u);

@@ -55,10 +55,7 @@ using Method = FlowMethod;
 /// The Taylor-Green cells; in 3D the same cells with w = 0 (independent of z).
 template <int Dim>
 Vec<Dim> exact(const Vec<Dim>& x) {
-  Vec<Dim> u = Vec<Dim>::Zero();
-  u[0] = std::sin(x[0]) * std::cos(x[1]);
-  u[1] = -std::cos(x[0]) * std::sin(x[1]);
-  return u;
+  return taylor_green<Dim>(x);
 }
 
 /// Samples per axis of the lattice the grid velocity is read on.
@@ -136,11 +133,7 @@ Sampled sample(const F& velocity) {
 /// Twice the kinetic energy of the box's liquid, from the particles.
 template <int Dim>
 double mean_square_speed(const AdaptivePic<Dim>& sim) {
-  const Particles<Dim>& p = sim.particles();
-  const std::vector<double> w = particle_volumes<Dim>(sim.graph(), p.x, std::pow(M_PI, Dim));
-  double sum = 0.0;
-  for (int i = 0; i < p.size(); ++i) sum += w[i] * p.v[i].squaredNorm();
-  return sum + 2.0 * affine_energy<Dim>(sim, w);
+  return twice_kinetic_energy<Dim>(sim, std::pow(M_PI, Dim));
 }
 
 struct Checkpoint {

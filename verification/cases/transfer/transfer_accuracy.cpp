@@ -38,6 +38,7 @@
 #include "liquid/transfer/regular.hpp"
 #include "liquid/transfer/scattered.hpp"
 #include "liquid/tree/builders.hpp"
+#include "studies/flow_measures.hpp"
 
 namespace liquid::verification {
 namespace {
@@ -213,14 +214,6 @@ void reconstruction(const CaseOptions& options, Table& fig4, Table& conv, Table&
                       Dim, r, e_rec[1][r], e_rec[0][r]));
       break;
     }
-}
-
-template <int Dim>
-Vec<Dim> taylor_green(const Vec<Dim>& x) {
-  Vec<Dim> v = Vec<Dim>::Zero();
-  v[0] = std::sin(x[0]) * std::cos(x[1]);
-  v[1] = -std::cos(x[0]) * std::sin(x[1]);
-  return v;
 }
 
 template <int Dim>
