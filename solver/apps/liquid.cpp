@@ -20,6 +20,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <limits>
 
 #include "liquid/core/error.hpp"
 #include "liquid/linalg/solver.hpp"
@@ -85,6 +86,12 @@ void echo(const Scene<Dim>& s, const RunSettings& settings, bool resumed) {
                  ? "; full Hager-Higham condition estimates"
                  : "",
              o.poisson.nullspace == mac::Nullspace::pin ? "; a closed box's PPE pinned at one cell" : "");
+  if (rbf_transfer && (o.rbf.exponent != 5 || o.rbf.degree != 2))
+    fmt::print("  transfer    PHS r^{} + degree {} (the paper's: r^5 + degree 2)\n", o.rbf.exponent,
+               o.rbf.degree);
+  if (o.reseed && o.reseeding.lo == 1 && o.reseeding.hi == std::numeric_limits<int>::max())
+    fmt::print("  reseeding   holes only (the paper's replaces every particle of a cell outside [{}, {}])\n",
+               Dim == 2 ? 3 : 5, Dim == 2 ? 12 : 15);
   fmt::print("  surface     {}\n",
              o.surface == PicSurface::air_cells
                  ? std::string("p = 0 at the air cells' centres")

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <limits>
 #include <numbers>
 #include <optional>
 
@@ -566,10 +567,11 @@ Scene<Dim> load_scene(const std::string& path) {
   static const toml::table empty;
   {
     const toml::table* t = top.table("solver");
-    const TableReader r(t ? *t : empty, path, "solver",
-                        {"method", "adaptive", "flip", "integrator", "reseed", "reseed_mode", "gravity",
-                         "extrapolation", "advect_cfl", "surface", "surface_radius", "projection",
-                         "min_face_mass", "share_factors", "condition_estimate", "nullspace"});
+    const TableReader r(
+        t ? *t : empty, path, "solver",
+        {"method", "adaptive", "flip", "integrator", "reseed", "reseed_mode", "gravity", "extrapolation",
+         "advect_cfl", "surface", "surface_radius", "projection", "min_face_mass", "share_factors",
+         "condition_estimate", "nullspace", "transfer_exponent", "transfer_degree"});
     const std::string method = r.choice("method", {"rbf", "pic", "flip", "apic", "sph"}, std::string("rbf"));
     s.sph = method == "sph";
     o.transfer = parse_pic_transfer(s.sph ? "rbf" : method);
@@ -583,7 +585,17 @@ Scene<Dim> load_scene(const std::string& path) {
     o.integrator = r.choice("integrator", {"rk2", "rk3"}, std::string("rk2")) == "rk2" ? Integrator::rk2
                                                                                        : Integrator::rk3;
     o.reseed = r.boolean("reseed", true);
-    o.reseeding.keep = r.choice("reseed_mode", {"replace", "keep"}, std::string("replace")) == "keep";
+    const std::string reseed_mode =
+        r.choice("reseed_mode", {"replace", "keep", "holes"}, std::string("replace"));
+    o.reseeding.keep = reseed_mode == "keep";
+    if (reseed_mode == "holes") {  // only cells the step left empty inside the liquid
+      o.reseeding.lo = 1;
+      o.reseeding.hi = std::numeric_limits<int>::max();
+    }
+    o.rbf.exponent = static_cast<int>(r.integer_in("transfer_exponent", 1, 9, o.rbf.exponent));
+    LIQUID_VERIFY(o.rbf.exponent % 2 == 1, "{}: the PHS exponent must be odd (1, 3, 5, 7 or 9), got {}",
+                  r.where("transfer_exponent"), o.rbf.exponent);
+    o.rbf.degree = static_cast<int>(r.integer_in("transfer_degree", 0, 4, o.rbf.degree));
     o.rbf.share_factors = r.boolean("share_factors", true);
     o.rbf.condition_estimate =
         r.choice("condition_estimate", {"probes", "hager-higham"}, std::string("probes")) == "probes"

@@ -5,6 +5,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <sstream>
 
 #include "liquid/core/error.hpp"
@@ -70,16 +71,20 @@ TEST(Scene, ValuesAndOverridesReachTheSolverOptions) {
   EXPECT_TRUE(s.pic.rbf.share_factors);  // the defaults
   EXPECT_EQ(s.pic.rbf.condition_estimate, rbf::ConditionEstimate::probes);
   EXPECT_EQ(s.pic.poisson.nullspace, mac::Nullspace::zero_mean);
+  EXPECT_EQ(s.pic.rbf.exponent, 5);  // the paper's transfer and reseeding
+  EXPECT_EQ(s.pic.rbf.degree, 2);
+  EXPECT_EQ(s.pic.reseeding.lo, 0);
   {
     // [solver] share_factors = false and condition_estimate = "hager-higham" reach the transfer's
-    // options, and nullspace = "pin" the PPE's.
+    // options, nullspace = "pin" the PPE's, and the transfer kernel and holes-only reseeding theirs.
     std::ifstream in(find_scene("drop-2d"));
     std::stringstream text;
     text << in.rdbuf();
     std::string toml = text.str();
     const auto at = toml.find("[solver]");
     const std::string keys =
-        "\nshare_factors = false\ncondition_estimate = \"hager-higham\"\nnullspace = \"pin\"";
+        "\nshare_factors = false\ncondition_estimate = \"hager-higham\"\nnullspace = \"pin\""
+        "\ntransfer_exponent = 3\ntransfer_degree = 1\nreseed_mode = \"holes\"";
     toml = at == std::string::npos ? toml + "\n[solver]" + keys + "\n" : toml.insert(at + 8, keys);
     const std::string path = ::testing::TempDir() + "/own-factors.toml";
     std::ofstream(path) << toml;
@@ -87,6 +92,11 @@ TEST(Scene, ValuesAndOverridesReachTheSolverOptions) {
     EXPECT_FALSE(own.pic.rbf.share_factors);
     EXPECT_EQ(own.pic.rbf.condition_estimate, rbf::ConditionEstimate::hager_higham);
     EXPECT_EQ(own.pic.poisson.nullspace, mac::Nullspace::pin);
+    EXPECT_EQ(own.pic.rbf.exponent, 3);
+    EXPECT_EQ(own.pic.rbf.degree, 1);
+    EXPECT_EQ(own.pic.reseeding.lo, 1);  // holes only: no cell with a particle is reseeded
+    EXPECT_EQ(own.pic.reseeding.hi, std::numeric_limits<int>::max());
+    EXPECT_FALSE(own.pic.reseeding.keep);
   }
   const Scene<3> obstacles = load_scene<3>(find_scene("dam-break-obstacles-3d"));
   ASSERT_TRUE(static_cast<bool>(obstacles.pic.solid));
