@@ -15,9 +15,11 @@
 // Expected (gated): volume drift <= 1%, speeds <= 1e-2 sqrt(g H), pressure error <= 2 h / H; not for
 // regular-pic-mass (the mass projection), which stirs the pool: measured, gated, warned about. The
 // split projection (regular-pic-split, regular-apic-split) is held to the bounds: gravity's kick is
-// projected in volumes, so the pool's pressure is the volume projection's hydrostatic one.
+// projected in volumes, so the pool's pressure is the volume projection's hydrostatic one. So is
+// adaptive-rbf-r3-holes, the variant of the vortex case (PHS r^3 + degree 1, holes-only reseeding).
 
 #include <cmath>
+#include <limits>
 
 #include <fmt/format.h>
 
@@ -36,6 +38,9 @@ struct Method {
   bool adaptive;
   PicTransfer transfer;
   PicProjection projection = PicProjection::volume;
+  /// PHS r^3 + degree 1 transfers and holes-only reseeding (scene keys transfer_exponent,
+  /// transfer_degree, reseed_mode = "holes"): the variant that keeps the vortex (vorticity).
+  bool variant = false;
 };
 // regular-pic-mass: PIC with the projection orthogonal in the faces' transferred masses
 // (PicProjection::mass), under which a closed dam break's energy never rises (kinetic-energy). It
@@ -48,7 +53,8 @@ const Method kMethods[] = {{"regular-pic", false, PicTransfer::pic},
                            {"regular-apic", false, PicTransfer::apic},
                            {"regular-pic-mass", false, PicTransfer::pic, PicProjection::mass},
                            {"regular-pic-split", false, PicTransfer::pic, PicProjection::split},
-                           {"regular-apic-split", false, PicTransfer::apic, PicProjection::split}};
+                           {"regular-apic-split", false, PicTransfer::apic, PicProjection::split},
+                           {"adaptive-rbf-r3-holes", true, PicTransfer::rbf, PicProjection::volume, true}};
 
 struct Outcome {
   double volume_drift = 0.0, height_drift = 0.0, particle_speed = 0.0, face_speed = 0.0, pressure = 0.0;
@@ -82,6 +88,12 @@ Outcome run_pool(const Method& m, bool full, Table& series) {
   o.transfer = m.transfer;
   o.projection = m.projection;
   o.solver.kind = default_ppe_solver(m.adaptive, Dim);  // as a scene file would: PCG on the regular grid
+  if (m.variant) {
+    o.rbf.exponent = 3;
+    o.rbf.degree = 1;
+    o.reseeding.lo = 1;
+    o.reseeding.hi = std::numeric_limits<int>::max();
+  }
   AdaptivePic<Dim> sim(o);
   Vec<Dim> hi = Vec<Dim>::Ones();
   hi[1] = kDepth;
