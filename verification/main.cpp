@@ -66,6 +66,8 @@ int main(int argc, char** argv) {
   bool quick_names = false;
   list->add_flag("--quick-names", quick_names,
                  "print only the names of the quick cases, one a line (for ctest)");
+  bool list_markdown = false;
+  list->add_flag("--markdown", list_markdown, "print the cases as a Markdown table (the README's)");
 
   std::string case_name, json_path, md_path;
   lv::StudyFlags flags;
@@ -115,6 +117,19 @@ int main(int argc, char** argv) {
       if (quick_names) {
         for (const auto& c : lv::case_registry())
           if (c.quick) fmt::print("{}\n", c.name);
+        return 0;
+      }
+      if (list_markdown) {
+        // Grouped by family (the folder under verification/cases/), then by name.
+        std::vector<const lv::CaseInfo*> cases;
+        for (const auto& c : lv::case_registry()) cases.push_back(&c);
+        std::stable_sort(cases.begin(), cases.end(), [](const lv::CaseInfo* a, const lv::CaseInfo* b) {
+          return lv::case_family(a->name) < lv::case_family(b->name);
+        });
+        fmt::print("| case | family | tier | what it checks |\n| --- | --- | --- | --- |\n");
+        for (const lv::CaseInfo* c : cases)
+          fmt::print("| `{}` | {} | {} | {} |\n", c->name, lv::case_family(c->name),
+                     c->quick ? "quick" : "full", c->summary);
         return 0;
       }
       for (const auto& c : lv::case_registry())

@@ -403,6 +403,35 @@ int run_scene(const Args& a, const std::string& scene_path) {
   return 0;
 }
 
+/// One Markdown row of a built-in scene, read from its file.
+template <int Dim>
+void print_scene_row(const std::string& name, const std::string& path) {
+  const Scene<Dim> s = load_scene<Dim>(path);
+  const std::string grid =
+      s.sph ? std::string("particles") : fmt::format("{} / {}", s.pic.coarse_level, s.pic.fine_level);
+  const std::string length =
+      std::isfinite(s.time.end) ? fmt::format("{:g} s", s.time.end) : fmt::format("{} steps", s.time.steps);
+  const std::string method =
+      s.sph ? std::string("adaptive SPH")
+            : (s.pic.adaptive ? std::string("adaptive ") : std::string("regular ")) + s.method();
+  fmt::print("| `{}` | {}D | {} | {} | {} | {} | {} |\n", name, Dim, method,
+             s.figure.empty() ? std::string("-") : s.figure, s.description, grid, length);
+}
+
+/// The built-in scenes as the README's Markdown table.
+void print_scene_table() {
+  fmt::print(
+      "| scene | dim | method | paper figure | what it shows | levels (coarse / finest) | simulated |\n");
+  fmt::print("| --- | --- | --- | --- | --- | --- | --- |\n");
+  for (const auto& [name, description] : builtin_scenes()) {
+    const std::string path = find_scene(name);
+    if (scene_dimension(path) == 2)
+      print_scene_row<2>(name, path);
+    else
+      print_scene_row<3>(name, path);
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -410,6 +439,8 @@ int main(int argc, char** argv) {
       "liquid: the adaptive RBF liquid solver, its regular PIC/FLIP/APIC baselines, and adaptive SPH"};
   app.require_subcommand(1);
   auto* scenes = app.add_subcommand("scenes", "list the built-in scenes");
+  bool scenes_markdown = false;
+  scenes->add_flag("--markdown", scenes_markdown, "print the scenes as a Markdown table (the README's)");
   Args a;
   auto* run = app.add_subcommand("run", "run a scene (a built-in name or a .toml file)");
   run->add_option("scene", a.scene, "built-in scene name or path to a scene file");
@@ -460,6 +491,10 @@ int main(int argc, char** argv) {
 
   try {
     if (*scenes) {
+      if (scenes_markdown) {
+        print_scene_table();
+        return 0;
+      }
       for (const auto& [name, description] : builtin_scenes()) fmt::print("{:<26} {}\n", name, description);
       return 0;
     }

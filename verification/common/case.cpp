@@ -1,6 +1,8 @@
 #include "common/case.hpp"
 
 #include <algorithm>
+#include <filesystem>
+#include <map>
 #include <utility>
 
 #include "liquid/core/error.hpp"
@@ -63,7 +65,21 @@ const CaseInfo* find_case(const std::string& name) {
   return nullptr;
 }
 
-CaseRegistrar::CaseRegistrar(CaseInfo info) {
+namespace {
+std::map<std::string, std::string>& families() {
+  static std::map<std::string, std::string> by_name;
+  return by_name;
+}
+}  // namespace
+
+const std::string& case_family(const std::string& name) {
+  static const std::string none;
+  const auto it = families().find(name);
+  return it == families().end() ? none : it->second;
+}
+
+CaseRegistrar::CaseRegistrar(const char* file, CaseInfo info) {
+  families()[info.name] = std::filesystem::path(file).parent_path().filename().string();
   LIQUID_VERIFY(find_case(info.name) == nullptr, "verification case '{}' registered twice", info.name);
   auto& cases = case_registry();
   cases.push_back(std::move(info));

@@ -159,9 +159,12 @@ struct CaseInfo {
 /// All registered cases, in name order.
 std::vector<CaseInfo>& case_registry();
 const CaseInfo* find_case(const std::string& name);
+/// A registered case's family: the folder under verification/cases/ of the file that registered it.
+const std::string& case_family(const std::string& name);
 
 struct CaseRegistrar {
-  explicit CaseRegistrar(CaseInfo info);
+  /// `file` is the registering source file; its folder under cases/ names the case's family.
+  CaseRegistrar(const char* file, CaseInfo info);
 };
 
 }  // namespace liquid::verification
@@ -169,6 +172,6 @@ struct CaseRegistrar {
 #define LIQUID_VERIFICATION_CASE_CAT2(a, b) a##b
 #define LIQUID_VERIFICATION_CASE_CAT(a, b) LIQUID_VERIFICATION_CASE_CAT2(a, b)
 /// Registers a case: LIQUID_VERIFICATION_CASE({"name", "summary", true, run_function});
-#define LIQUID_VERIFICATION_CASE(...)                                                         \
-  static const ::liquid::verification::CaseRegistrar LIQUID_VERIFICATION_CASE_CAT(registrar_, \
-                                                                                  __LINE__)(__VA_ARGS__)
+#define LIQUID_VERIFICATION_CASE(...)                                                                    \
+  static const ::liquid::verification::CaseRegistrar LIQUID_VERIFICATION_CASE_CAT(registrar_, __LINE__)( \
+      __FILE__, __VA_ARGS__)

@@ -37,7 +37,7 @@ SolveStats amg_solve_rows(const SparseMatrix& rows, const Vector& b, Vector& x, 
 /// the same column indices in every row, checked on every rank) copies the new values into the
 /// kept matrix and preconditions with the kept hierarchy (coarse levels from the matrix it was
 /// built for, the finest level's smoothing on the new values); any other solve builds a new one.
-/// Policy (AmgOptions::reuse_factor, measured in the README): a kept hierarchy is rebuilt before
+/// Policy (AmgOptions::reuse_factor; docs/findings/amg.md): a kept hierarchy is rebuilt before
 /// the next solve once a solve with it needed more than reuse_factor times the iterations of the
 /// solve that built it, and at once (the solve repeated) when a solve with it did not converge.
 /// reuse_factor = 0 builds a new hierarchy for every solve.

@@ -25,11 +25,9 @@ enum class SolverKind {
   cg_amg,           ///< conjugate gradients preconditioned by BoomerAMG (symmetric only)
 };
 
-/// BoomerAMG's settings as a preconditioner (one V-cycle per application), hypre's codes.
-/// Measured on the 5-point Dirichlet Poisson matrix (n x n, n = 16 ... 512, tolerance 1e-8, one
-/// thread): without aggressive coarsening BiCGSTAB takes 3 iterations and CG 5-6 at every n, in
-/// the same time as with one level of it (BiCGSTAB 5 -> 9, CG 9 -> 15 as n grows: not flat);
-/// PMax 4 or unlimited and smoother 6 or 8 changed the time by less than the noise.
+/// BoomerAMG's settings as a preconditioner (one V-cycle per application), hypre's codes. Without
+/// aggressive coarsening the iteration count stays flat as the grid grows, at no extra time.
+/// Why these defaults: docs/findings/amg.md.
 struct AmgOptions {
   int coarsening = 10;                ///< 10 HMIS (hypre's default 6 is Falgout)
   int interpolation = 6;              ///< 6 extended+i
@@ -39,12 +37,12 @@ struct AmgOptions {
   double strength = 0.25;     ///< strong-connection threshold
   int aggressive_levels = 0;  ///< levels of aggressive coarsening at the top
   int gmres_restart = 30;
-  /// At most this many Krylov iterations (or SolveOptions::max_iterations if fewer). AMG either
-  /// converges in tens or not at all: on the 3D "nearest" stencil rows of poisson-stencil-rules
-  /// (20,672 unknowns) BiCGSTAB+AMG stagnated at residual 1.0 for 20,000 iterations (167 s).
+  /// At most this many Krylov iterations (or SolveOptions::max_iterations if fewer): AMG either
+  /// converges in tens or stagnates, and a stagnating solve should fail fast (docs/findings/amg.md).
   int max_iterations = 500;
   /// A kept hierarchy (AmgHierarchy, the solvers of make_solver()) is rebuilt once a solve with it
   /// needs more than this many times the iterations of the solve that built it; 0: never kept.
+  /// Why this default: docs/findings/amg.md.
   double reuse_factor = 1.5;
 };
 
@@ -59,10 +57,8 @@ struct SolveOptions {
   double tolerance = 1e-10;  ///< relative residual |b - A x| / |b| to reach
   int max_iterations = 20000;
   // ILUT (bicgstab-ilut): entries below droptol * |row| are dropped, and at most fill * (row's
-  // entries) are kept per factor row. Eigen's defaults (1e-12, 10) keep nearly everything and made
-  // the factorisation 10-15 times slower than the iterations it saves on the 3D Poisson cases; at
-  // (1e-3, 10) the 3D Neumann row of 37k unknowns solves in 1.3 s instead of 15 s (20 iterations
-  // instead of 16) and the 262k uniform row in 6.4 s instead of 80 s, and 2D is no slower.
+  // entries) are kept per factor row. Eigen's defaults (1e-12, 10) keep nearly everything, and the
+  // factorisation then costs far more than the iterations it saves in 3D. Why: docs/findings/amg.md.
   double ilut_droptol = 1e-3;
   int ilut_fill = 10;
   AmgOptions amg{};

@@ -19,25 +19,22 @@ namespace liquid::mac {
 
 enum class Nullspace { pin, zero_mean };
 
-// Polynomial degrees. The paper uses degree 2 everywhere; both defaults here are 3, as measured:
+// Polynomial degrees. The paper uses degree 2 everywhere; both defaults here are 3:
 //   - Laplacian rows: degree m reproduces polynomials of degree m, so the truncation error of a
-//     second derivative is O(h^(m-1)). Degree 2 leaves O(h) on the layer of T-junction rows. p still
-//     converges at second order, but that layer's error shows in dp/dn: with rows made by
-//     subdivision, dp/dn converged at 1.75 (2D Neumann, worst faces the hanging faces at the layer)
-//     and 1.18 (3D Neumann), and 3D Dirichlet missed in p too (1.49). Degree 3 gave 1.9-2.3 on all
-//     four paper studies (case poisson-rbf-degree runs both side by side).
-//   - Face gradients: with degree 2 (an O(h^2) gradient stencil) the L-inf of dp/dn at hanging
-//     faces next to a Dirichlet interface converged at about 1.7 on the 2D level-set case; degree 3
-//     gave 1.9-2.0 and 5-10 times smaller errors, the maximum moving to plain FD faces.
+//     second derivative is O(h^(m-1)). Degree 2 leaves O(h) on the layer of T-junction rows; p still
+//     converges at second order, but that layer's error shows in dp/dn.
+//   - Face gradients: degree 2 (an O(h^2) gradient stencil) loses order in dp/dn at hanging faces
+//     next to a Dirichlet interface.
+// Why these defaults: docs/findings/rbf-fd-degree.md (case poisson-rbf-degree runs both).
 struct PoissonOptions {
   rbf::Config rbf{3, 3};                 ///< kernel and polynomial degree of the RBF-FD Laplacian rows
   int gradient_degree = 3;               ///< polynomial degree of RBF-FD face gradients (see above)
-  StencilRule rule = StencilRule::ring;  ///< how irregular stencils are chosen (ring: best L-inf measured)
+  StencilRule rule = StencilRule::ring;  ///< irregular stencil choice (docs/findings/poisson-convergence.md)
   double growth = 2.0;                   ///< irregular stencils get stencil_size(Dim, degree, growth) nodes
   /// `ring` rule: keep at most ring_cap times that size, the nodes nearest the centre (with every
   /// node tied with the last kept); 0 keeps the whole rings. A study option (liquid-verify
-  /// --ring-cap), measured and not taken: faster in 3D, but a 3D scene blew up with it and the 3D
-  /// studies lost accuracy (README, "How each phase grows with the work").
+  /// --ring-cap), not the default: faster in 3D but less accurate and less stable
+  /// (docs/findings/poisson-convergence.md).
   double ring_cap = 0.0;
   /// The most nodes a stencil of `n_target` may keep under the rule (0: no limit).
   int node_cap(int n_target) const;

@@ -59,9 +59,9 @@ void candidates(const CellGraph<Dim>& graph, std::span<const CellId> seeds, cons
       // Laplacian stencils (one seed) also need half the target counted by the area of a side
       // the cells cover: a cell j levels finer than the centre counts 2^(-(Dim-1) j), so the
       // 2^((Dim-1) j) cells behind one finer side count as one neighbour. By the plain count alone
-      // a 3D cell with a side two levels finer stopped at its 1-ring (1 + 5 + 16 = 22 >= 21
-      // nodes): 16 nodes on one side, one on each other side, |tau| ~ 3 and sum|w| / diag ~ 6 at
-      // those rows, which carried most of the L-inf error of p. Face stencils keep the plain count.
+      // a 3D cell with a side two levels finer stops at its 1-ring (1 + 5 + 16 = 22 >= 21 nodes):
+      // 16 nodes on one side, one on each other side, a lopsided row with a large truncation error.
+      // Face stencils keep the plain count.
       const bool by_area = seeds.size() == 1;
       const int ref_level = graph.level(seeds[0]);
       for (int k = 1; k <= max_k; ++k) {

@@ -8,8 +8,8 @@
 //   - a particle whose cell was split or merged by the last adapt is looked up among the cells
 //     that replaced it (the adapt report's origins);
 //   - only a particle that left its cell is located from the root (an O(depth) descent along its
-//     Morton code; measured as fast as trying the face neighbours first, which in 3D means up to
-//     dozens of box tests: BM_Binning, 1M particles, 2.2% of them leaving their cell).
+//     Morton code; as fast as trying the face neighbours first, which in 3D means up to dozens of
+//     box tests).
 // BinStats counts each kind.
 
 #include <cstdint>

@@ -109,7 +109,7 @@ AdaptivePic<Dim>::AdaptivePic(const PicOptions<Dim>& options)
   known_.assign(graph_.face_capacity(), 1);
   p_.assign(graph_.cell_capacity(), 0.0);
   weights_ = std::make_unique<rbf::WeightCache<Dim>>(0x1p-24, std::size_t{1} << 14);
-  // Made here, outside the timed phases: an AMG solver starts MPI (about 0.3 s) when it is made.
+  // Made here, outside the timed phases: an AMG solver starts MPI when it is made.
   ppe_solver_ = linalg::make_solver(options_.solver);
 }
 
@@ -157,9 +157,9 @@ void AdaptivePic<Dim>::seed(const levelset::Function<Dim>& liquid,
     }
   if (changed) {
     // Seed again on the settled tree. The rounds above filled the children of split cells from the
-    // grid, which is still at rest, and left others with one particle each: a Taylor-Green box with
-    // a refined centre started with 23% less particle energy than its velocity field, which the
-    // first step's transfers then restored, and read as an energy gain.
+    // grid, which is still at rest, and left others with one particle each: the particles would
+    // start with less energy than their velocity field, which the first step's transfers restore
+    // and which would read as an energy gain.
     particles_.clear();
     seed_region<Dim>(graph_, region, SeedOptions{}, particles_, source);
     bin_particles<Dim>(graph_, particles_.x, bins_);
@@ -334,9 +334,8 @@ void AdaptivePic<Dim>::adapt_grid(PicStepReport& r) {
       if (options_.refine(graph_.centre(c)) < 0.5 * graph_.cell_size(c).norm()) centres.push_back(c);
     });
   // So is the liquid's contact with a solid, two hops wider than the band: no RBF-FD row then
-  // reaches a solid cell, where fold_solid_rows() is only first order. Measured on a still pool
-  // around a submerged box (2D, levels 3-5, 10 steps): 0.24 m/s with no refinement at the
-  // contact (coarse, half-solid cells), 0.033 with the band's width, 1e-12 with two hops more.
+  // reaches a solid cell, where fold_solid_rows() is only first order (a still pool around a
+  // submerged box then stays still; docs/findings/pic-solver.md).
   if (!solid_.empty()) {
     std::vector<CellId> ring;
     for (CellId c : cls_.fluid)
@@ -481,7 +480,7 @@ void AdaptivePic<Dim>::assemble(double dt) {
     });
     // Every solid cell is an unknown (decoupled by fold_solid_rows()), and the level set is
     // negative inside the solid, so that each edge the PPE cuts has a sign change on it: a solid
-    // cell left outside had none towards its solid neighbours (measured: dam-break-obstacles-3d).
+    // cell left outside had none towards its solid neighbours (seen on dam-break-obstacles-3d).
     if (!solid_.empty()) {
       graph_.for_each_cell([&](CellId c) {
         if (cls_.is_solid(c)) problem.boundary.unknown_cells[c] = 1;
@@ -522,8 +521,7 @@ void AdaptivePic<Dim>::assemble(double dt) {
   problem.pin_value = [](const Vec<Dim>&) { return 0.0; };
   // Walls: dp/dn = (u* - u_wall) . n / dt with u_wall = 0, which is what makes the flux balance of
   // every row (FD and RBF-FD alike) hold for the hydrostatic pressure. With dp/dn = 0 the mirror
-  // nodes of RBF-FD rows that reach a wall see a kinked pressure (an O(1) row error, measured on
-  // the still pool).
+  // nodes of RBF-FD rows that reach a wall see a kinked pressure (an O(1) row error).
   const double nudge = 1e-6 * finest_h();
   problem.boundary.wall_flux = [this, dt, nudge](const Vec<Dim>& x, const Vec<Dim>& n) {
     int axis = 0;
@@ -808,8 +806,8 @@ PicStepReport AdaptivePic<Dim>::advance(double dt) {
         return;
       }
       // The mass pass solves for the whole pressure q = p + p_g (A q = b + A p_g): its tolerance is
-      // then relative to the whole step's right-hand side, as one solve's would be. Relative to its
-      // own, which is round-off in a pool at rest, it took ~200 iterations a step to reduce noise.
+      // then relative to the whole step's right-hand side, as one solve's would be, not to its own
+      // (round-off in a pool at rest, where the solver would iterate on noise).
       linalg::Vector gravity = linalg::Vector::Zero(system_.A.rows());
       for (long i = 0; i < system_.n_unknowns(); ++i)
         gravity[i] = gravity_pressure_[system_.layout.cell_of_dof[i]];

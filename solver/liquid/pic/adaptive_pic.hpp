@@ -4,7 +4,7 @@
 // the faces, and the PPE of `mac` with the air cells at p = 0. With `adaptive = false` the same
 // class runs on a uniform tree with the regular PIC/FLIP/APIC transfers: the paper's baselines.
 //
-// advance(dt) reads as the phases of ARCHITECTURE.md, each timed under its name:
+// advance(dt) reads as the phases of docs/architecture.md, each timed under its name:
 //   [sources] -> classify -> grid -> p2g -> forces -> laplacian -> ppe -> project -> extrapolate -> g2p ->
 //   advect -> reseed
 // Density is 1 (pressure in units of velocity^2). Walls are the domain's sides and the static
@@ -54,28 +54,18 @@ const char* to_string(PicSurface surface);
 PicSurface parse_pic_surface(const std::string& name);
 
 /// The inner product the pressure projection is orthogonal in (regular transfers, uniform tree):
-/// volume, every face weighing its volume (the standard PPE); or mass, every face weighing the mass
-/// the particle -> face transfer gave it, so that the projection never raises the faces' kinetic
-/// energy as the transfers count it. The PPE then is -div(beta grad p) = -div u* / dt with
-/// beta_f = m_full / max(m_f, min_face_mass m_full), m_full the mass of a cell's seeded
-/// particles, and the projection u -= dt beta grad p. A face that holds mass but is not projected
-/// (between two air cells: p = 0 on both sides) keeps its transferred value instead of an
-/// extrapolated one. Measured on the fixed-mass dam break (kinetic-energy, level 6): with both, no
-/// step of PIC or APIC raised the particles' energy; with the mass projection alone APIC's rose
-/// once by 3.3e-4 E(0), and with the volume projection PIC's by 1.4e-3, APIC's by 2.1e-3.
-/// But a still pool does not stay still under it (hydrostatic-pool, regular-pic-mass: 0.45
-/// sqrt(gH) within 2 s in 2D, 0.08 within 0.5 s in 3D; the volume projection: 1e-9): beta follows
-/// the particles' sampling, which varies along the floor, so g / beta has a curl no pressure
-/// balances. It shows where the energy comes from; it is not a method for scenes.
-/// split: gravity's kick dt g alone is projected in volumes first (its own PPE solve: the
-/// hydrostatic pressure wherever the liquid is at rest), added to the transferred velocity, and the
-/// sum projected in masses as above; the cell pressure is the sum of the two. Two solves a step. A
-/// still pool stays still (2D level 6, 2 s: 4e-11 sqrt(gH)), and on the fixed-mass dam break
-/// (2D level 6, 2 s) the largest rise of E is PIC 0, FLIP 0, APIC 1.5e-4 E(0), against 1.4e-3,
-/// 2.1e-3 and 2.1e-3 with the volume projection. Not exactly 0 for APIC: the volume-projected kick
-/// does work against the particles, -dt sum (m_f - rho V_f) u_f d_f p_g with the air-cell surface,
-/// which has no sign. Each step reports it (PicStepReport::pressure_work); it bounds every PIC
-/// step's rise of E (kinetic-energy).
+///   volume  every face weighs its volume (the standard PPE).
+///   mass    every face weighs the mass m_f the particle -> face transfer gave it, so the projection
+///           never raises the faces' kinetic energy as the transfers count it: -div(beta grad p) =
+///           -div u* / dt, beta_f = m_full / max(m_f, min_face_mass m_full) (m_full: a cell's seeded
+///           particles' mass), u -= dt beta grad p. Faces with mass between two air cells keep their
+///           transferred value. A diagnostic, not a method for scenes: beta follows the sampling, so
+///           g / beta has a curl no pressure balances and a still pool does not stay still.
+///   split   gravity's kick dt g is projected in volumes first (its own PPE solve), added to the
+///           transferred velocity, and the sum projected in masses; the cell pressure is the sum.
+///           Two solves a step; a still pool stays still. The volume-projected kick can still do work
+///           on the particles (no sign); PicStepReport::pressure_work reports it.
+/// Why these three: docs/findings/energy-and-projections.md.
 enum class PicProjection { volume, mass, split };
 const char* to_string(PicProjection projection);
 /// "volume", "mass", "split"; throws naming the choices.
@@ -123,10 +113,8 @@ struct PicOptions {
   linalg::SolveOptions solver{linalg::SolverKind::bicgstab_ilut, 1e-8};
   bool continue_on_ppe_failure = false;  ///< false: a PPE that does not converge stops the run
   PicSurface surface = PicSurface::air_cells;
-  /// levelset surface: the particle radius r, in finest cells. Measured on the still pool (2D,
-  /// levels 3-6, 0.5 s): 0.5 -> pressure error 0.0069 gH, spurious speed 0.069 m/s; 0.75 -> 0.0060,
-  /// 0.029; 1.0 -> 0.0156 (the air cells' error), 0.015; 1.25 -> 0.025, 0.0055. The air cells:
-  /// 0.0156 gH and 3e-11 m/s. A smaller r makes the surface bumpier, a larger one moves it out.
+  /// levelset surface: the particle radius r, in finest cells. A smaller r makes the surface
+  /// bumpier, a larger one moves it out. Why this default: docs/findings/pic-solver.md.
   double surface_radius = 0.75;
   PicProjection projection = PicProjection::volume;
   /// projection = mass: the lightest a face is taken to be, as a fraction of a full cell's mass
@@ -134,17 +122,12 @@ struct PicOptions {
   double min_face_mass = 0.1;
 
   /// The paper's operator settings for the PIC step: PHS r^3 with degree 2 for the Laplacian rows
-  /// and the face gradients (mac's default of degree 3 is for the convergence studies; see
-  /// poisson-rbf-degree). Measured on the still pool (3D, adaptive): laplacian + project 0.24 s a
-  /// step with degree 3, 0.042 s with degree 2.
-  /// A box full of liquid (no air cell: a pure Neumann PPE) takes the zero-mean constraint, not the
-  /// pin: on a tree the RBF-FD rows are not D G, so the sum of the rows' right-hand sides that the
-  /// wall fluxes make vanish is not what the matrix's left null vector asks for, and a pin puts
-  /// that mismatch into the pinned cell's equation, which it drops: a point source at the pinned
-  /// cell. Measured on the 3D Taylor-Green cells (adaptive, level 4, second step): the face
-  /// velocity next to the pinned cell, at the box's centre, was 1.00 where the flow has -0.10;
-  /// with zero mean the largest face error of the step is 0.035 (README, "Flow studies").
-  /// `[solver] nullspace = "pin"` in a scene.
+  /// and the face gradients (mac's default of degree 3 is for the convergence studies; degree 2 is
+  /// much cheaper a step). Why: docs/findings/rbf-fd-degree.md.
+  /// A box full of liquid (a pure Neumann PPE) takes the zero-mean constraint, not the pin: on a
+  /// tree the RBF-FD rows are not D G, so a pin drops the right-hand side's mismatch with the left
+  /// null vector into the pinned cell's equation, a point source there. Why:
+  /// docs/findings/flow-studies.md. `[solver] nullspace = "pin"` in a scene restores the pin.
   static mac::PoissonOptions paper_poisson() {
     mac::PoissonOptions p;
     p.rbf.degree = 2;
@@ -153,10 +136,8 @@ struct PicOptions {
     return p;
   }
   /// The paper's RBF transfer with particle -> face clamping on. Without it the interpolant's
-  /// extrapolation at free-surface and hanging faces feeds on itself: a 2D dam break (finest level
-  /// 6) blew up at t = 0.1 s on the adaptive tree and on a uniform one; clamped, both run stable
-  /// with the regular APIC's front (0.92 against 0.93 at t = 0.25 s). The price is accuracy of a
-  /// single transfer (transfer-accuracy: round-trip order 0.67 clamped against 2.3).
+  /// extrapolation at free-surface and hanging faces feeds on itself and a dam break blows up; the
+  /// price is a lower order of a single transfer. Why: docs/findings/transfer-stability.md.
   static TransferOptions stable_rbf() {
     TransferOptions t = TransferOptions::paper_rbf();
     t.clamp_faces = true;
@@ -196,10 +177,9 @@ struct PicStepReport {
   /// the projection and d_f p the normal derivative of the pressure that projection applied in
   /// volumes (projection volume: the whole pressure; split: the gravity pass's; mass: none, so 0).
   /// On a divergence-free field (air-cell surface) it would be 0 if every face weighed the same; it is the
-  /// energy the pressure can give the particles where their masses do not follow the cells' volumes. No PIC
-  /// step of the fixed-mass dam break raised the particles' energy by more than this (kinetic-energy asserts
-  /// it; APIC's exceed it as their energy is counted: README). Regular transfers only (their face masses);
-  /// NaN with the RBF transfers.
+  /// energy the pressure can give the particles where their masses do not follow the cells' volumes, and
+  /// it bounds a PIC step's rise of the particles' energy (the kinetic-energy case asserts it; see
+  /// docs/findings/energy-and-projections.md). Regular transfers only (their face masses); NaN with RBF.
   double pressure_work = std::numeric_limits<double>::quiet_NaN();
   AdvectReport advect;
   ReseedReport reseed;

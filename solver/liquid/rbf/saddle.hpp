@@ -34,8 +34,8 @@ struct SaddleSystem {
   }
 
   /// LU with partial pivoting: the matrix is symmetric but indefinite (the zero polynomial block),
-  /// and LU costs about a third of the column-pivoted QR used before, which took two thirds of the
-  /// assembly time at degree 3. Rank deficiency shows as a huge condition estimate.
+  /// and LU is much cheaper than a column-pivoted QR. Rank deficiency shows as a huge condition
+  /// estimate.
   Eigen::PartialPivLU<Eigen::MatrixXd> lu;
   Eigen::MatrixXd matrix;  ///< K itself, for the refinement step
   Status status;

@@ -51,8 +51,8 @@ enum class ConditionEstimate {
   /// Hager's gradient ascent with Higham's alternating probe (Eigen's rcond): up to 10 solves.
   hager_higham,
   /// Hager's first probe and Higham's alternating one, without the ascent: one two-column solve.
-  /// Not above hager_higham's figure but for rounding (the ascent starts from the same probe), and
-  /// within a factor 8 of it on the 3D stencils tested.
+  /// Not above hager_higham's figure but for rounding (the ascent starts from the same probe); how
+  /// close it comes: docs/findings/table1.md.
   probes,
 };
 

@@ -542,12 +542,13 @@ template <int Dim>
 Scene<Dim> load_scene(const std::string& path) {
   const toml::table doc = parse(path);
   const TableReader top(doc, path, "",
-                        {"name", "description", "domain", "grid", "solver", "sph", "time", "ppe", "output",
+                        {"name", "description", "figure", "domain", "grid", "solver", "sph", "time", "ppe", "output",
                          "fluid", "solid", "source"});
   Scene<Dim> s;
   s.path = path;
   s.name = top.string("name", std::filesystem::path(path).stem().string());
   s.description = top.string("description", std::string());
+  s.figure = top.string("figure", std::string());
   PicOptions<Dim>& o = s.pic;
 
   const toml::table* domain = top.table("domain");

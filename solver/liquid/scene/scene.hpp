@@ -71,6 +71,7 @@ template <int Dim>
 struct Scene {
   std::string name;         ///< the file's `name`, or its stem
   std::string description;  ///< one line
+  std::string figure;       ///< the paper's figure the scene reproduces ("" if none)
   std::string path;         ///< the file read
   PicOptions<Dim> pic;      ///< domain, levels, method, solids, sources, PPE
   levelset::Function<Dim> liquid;
@@ -106,13 +107,9 @@ double sph_sound_speed(const Scene<Dim>& scene);
 
 /// The PPE solver of a scene that names none: for the adaptive tree's non-symmetric matrix
 /// BiCGSTAB+ILUT in 2D and BiCGSTAB+AMG in 3D; Jacobi-preconditioned CG for the regular grid's symmetric one
-/// (the paper's regular baseline). Measured on regular APIC runs, seconds of `ppe` a step, warm-started from
-/// the last pressure: dam-break-2d at level 7 (16k cells): cg-jacobi 0.0068, cg-amg 0.0093, bicgstab-ilut
-/// 0.0109, cg-ic 0.0137; dam-break-obstacles-3d at level 5: cg-jacobi 0.0076, cg-ic 0.0275, cg-amg
-/// 0.0518, bicgstab-ilut 0.0685. On the 3D tree BiCGSTAB+AMG, its hierarchy kept while the
-/// layout stays (AmgOptions::reuse_factor): ppe seconds a step over 30-40 steps, against
-/// bicgstab-ilut: dam-break-3d 0.0052 / 0.0067, drop-3d 0.0068 / 0.0091, pool-3d 0.0011 / 0.0107.
-/// On the 2D tree ILUT stays: dam-break-2d 0.0006 against AMG's 0.0016 (3 warm iterations).
+/// (the paper's regular baseline). Each was the fastest `ppe` phase on the built-in scenes; the 3D
+/// tree's AMG keeps its hierarchy while the layout stays (AmgOptions::reuse_factor).
+/// Why these defaults: docs/findings/amg.md.
 linalg::SolverKind default_ppe_solver(bool adaptive, int dim);
 
 /// 2 or 3, from domain.lo of the file (throws as load_scene does on a file that cannot be read).

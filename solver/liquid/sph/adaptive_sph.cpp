@@ -128,8 +128,7 @@ void AdaptiveSph<Dim>::add_frame_accelerations(double dt) {
     // Euler and centrifugal accelerations at x_n; the Coriolis term -2 w x v_n wants the velocity at
     // the force's time, which leap-frog does not hold (v is at the half step before). v_n = v + dt/2
     // (a - 2 w x v_n) is solved for v_n exactly (a rotation-like 2 x 2 or 3 x 3 inverse). With v
-    // itself the turn is first order: a free particle in a quarter turn ends 1.0e-3 off at
-    // dt = 1e-4 and 5.2e-4 at 5e-5.
+    // itself the turn would be first order in dt.
     const double k = dt * w;
     if constexpr (Dim == 2) {
       // w = w e_z: w x r = w (-r_y, r_x); w x (w x r) = -w^2 r.

@@ -51,12 +51,10 @@ struct SphSource {
 /// A container that turns (the paper's desk toy, Fig. 7) about `pivot`: by theta(t) = angle (u -
 /// sin(2 pi u) / (2 pi)), u = t / duration, until `duration`, then it rests at `angle` (radians; about
 /// the z axis in 2D, about `axis` in 3D). The turn starts and ends with no angular velocity or
-/// acceleration: leap-frog's first kick then needs no half step (with a sudden angular acceleration
-/// at t = 0 a free particle ends a quarter turn 4e-4 off at dt = 1e-4, first order in dt). The simulation
-/// runs in the container's frame, where the walls and the obstacles stand still: gravity turns the other way,
-/// and the frame's fictitious accelerations are added (Euler -w' x r, Coriolis -2 w x v, centrifugal -w x (w
-/// x r), r from the pivot), so the motion is that of the turning container, not an approximation of it.
-/// world() maps a point of the container's frame to the world's.
+/// acceleration, so leap-frog's first kick needs no half step and the turn stays second order in dt.
+/// The simulation runs in the container's frame (walls and obstacles stand still): gravity turns the
+/// other way and the fictitious accelerations are added (Euler -w' x r, Coriolis -2 w x v,
+/// centrifugal -w x (w x r), r from the pivot), exactly. world() maps a container point to the world.
 template <int Dim>
 struct SphRotation {
   double angle = 0.0;     ///< radians; 0: the container stands still
@@ -102,11 +100,10 @@ struct SphOptions {
   ResampleOptions resampling = ResampleOptions::for_dimension(Dim);
   double gamma_degrees = 60.0;  ///< medial-axis angle
   int projection_bisections = 1;
-  /// Radius of the footpoint disks, in support radii (the paper's: 1). Measured on the still 2D tank
-  /// (s = 1/100, levels 0-3), resampling at rest without moving: with 1, disks of large particles
-  /// tilted by a bumpy surface hand interior particles footpoints on their far rims, a third of the
-  /// particles read as medial axis, and every pass splits 30-300 particles (2600 after 12 passes, of
-  /// 5000); with 0.5 the passes settle within 8 (1140 particles, 2-4 changes a pass).
+  /// Radius of the footpoint disks, in support radii (the paper's: 1). Smaller disks keep large
+  /// particles' disks, tilted by a bumpy surface, from handing interior particles footpoints on their
+  /// far rims (read as medial axis, so resampling at rest never settles).
+  /// Why this default: docs/findings/sph.md.
   double disk_radius = 0.5;
   /// How the neighbour lists are found; the k-d tree is built on redistancing steps either way.
   NeighbourSearch search = NeighbourSearch::automatic;
@@ -115,25 +112,15 @@ struct SphOptions {
   /// rebuilds only the point tree). The sums skip pairs beyond their support, so the results are the
   /// same to the bit as with lists found every step (skin 0).
   double neighbour_skin = 0.2;
-  /// After a resampling that split or merged: true, the kept lists are patched (the new particles'
-  /// pairs found around them, in a grid of the built positions); false, they are found again by a
-  /// whole search. Also, when a few particles (at most a tenth) have moved half the skin and the
-  /// rest have not, only theirs are found again, around them. Same bits either way. The particle
-  /// shift moves a few large particles about a fortieth of a spacing a step, which ran the lists
-  /// out on 64 of the 3D dam break's first 120 steps (s = a/32, adaptive; 1 without the shift).
-  /// Timed by sph-gain-scaling (3D a/80, adaptive): neighbours 0.93 s a step with whole searches,
-  /// 0.45 with the movers refreshed by a patch that built a k-d tree and wrote its rows into fresh
-  /// storage, 0.18 with a grid, kept storage and every resampling patched (speed gain 1.77 -> 2.44
-  /// -> 2.93); with the movers' rows refreshed in place the gain is 3.18 (a/48: refresh 0.30 -> 0.17
-  /// us a particle a step).
+  /// true: after a split or merge the kept lists are patched (new particles' pairs found around
+  /// them), and when at most a tenth of the particles have moved half the skin only theirs are found
+  /// again; false: whole searches. Same bits either way. The refresh matters because the particle
+  /// shift keeps moving a few large particles. Why this default: docs/findings/sph.md.
   bool patch_lists = true;
-  /// Where the liquid meets a wall or an obstacle, its boundary is the solid's surface: footpoints
-  /// found within a level-0 spacing of a solid are replaced by the point of the solid nearest the
-  /// particle before the feature size is estimated (false: the paper's, every footpoint on the
-  /// particles' distance surface). Measured on the still 2D tank (s = 1/100): the particle layer
-  /// pressed on the floor sits on its own distance surface, its footpoint directions are noise, a
-  /// fifth of the medial-axis particles lay in it, and the tank split and merged ~9000 times in
-  /// 0.5 s while its liquid sank (see sph-hydrostatic).
+  /// Footpoints within a level-0 spacing of a solid become the solid's point nearest the particle
+  /// before the feature size is estimated (false: the paper's, every footpoint on the particles'
+  /// distance surface, where the layer pressed on a floor reads as medial axis and churns through
+  /// splits and merges). Why this default: docs/findings/sph.md.
   bool wall_footpoints = true;
   double restitution = 0.0;  ///< normal velocity kept (reversed) at a wall
   std::uint64_t seed = 1;    ///< the split directions' random stream
@@ -197,9 +184,9 @@ class AdaptiveSph {
   /// steps at stable_dt() with every velocity damped by exp(-dt / tau) per step (tau = duration / 8),
   /// then velocities zeroed and the clock, step count and timers reset. A lattice seeded at rho_0
   /// otherwise starts by falling into its hydrostatic compression, and the acoustic oscillation
-  /// that follows (measured in a 2D tank: kinetic energy 1 J per metre, speeds 0.1 sqrt(gH)) lasts
-  /// for seconds. With `hold`, the liquid settles inside that box instead of the container (a dam's
-  /// gate, removed when relax() returns). Sources and the container's turn are off while it settles.
+  /// that follows lasts for seconds. With `hold`, the liquid settles inside that box instead of the
+  /// container (a dam's gate, removed when relax() returns). Sources and the container's turn are off
+  /// while it settles.
   void relax(double duration, const Box<Dim>* hold = nullptr);
   /// dt by the speed of sound, the fastest particle, the largest acceleration and the viscosity:
   /// min(cfl s / (c + |v|max), 0.25 sqrt(s / |a|max), 0.125 rho_0 s^2 / mu), capped at max_dt, with

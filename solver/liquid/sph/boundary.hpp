@@ -3,8 +3,7 @@
 // negative inside the solid) add to a particle's density the kernel mass that lies beyond them, and
 // push back with the gradient of that share. With only collisions, the particles next to a wall miss
 // the kernel mass beyond it, read a low density and are crushed against the wall until the lattice
-// collapses there (measured: the still 2D tank reached speeds of 8 sqrt(gH)); with the wall's share
-// counted they sit at rest. Each wall is taken as the plane
+// collapses there; with the wall's share counted they sit at rest. Each wall is taken as the plane
 // tangent to it at the particle's distance d, so its share is a function of d / r alone:
 //   density    rho_0 Phi(d / r),    Phi(delta) = the density kernel's mass beyond a plane at delta r
 //   pressure   a = -(P_i rho_0 / rho_i^2) grad Phi: a wall at zero pressure (FluidConstants::
@@ -12,17 +11,15 @@
 //              force of Eq. 1 summed over the wall sees it: pressure P_i beyond it, growing with
 //              depth as at rest (hydrostatic_gradient), and the normal velocity reversed, so the
 //              push and the continuity's wall term are both twice the zero-pressure wall's (doubling
-//              the push alone breaks the energy balance between them: measured, a still tank's
-//              bottom layer then moved at 0.4-1 m/s within 0.2 s). The zero-pressure wall pushes a particle
-//              of uniform pressure back with half the force the liquid on its other side pushes it
-//              with: a still tank's floor row rested on the collisions' margin. Without the growth
-//              with depth, a particle by a side wall misses the vertical pressure gradient of the
-//              kernel's part beyond it, and the liquid slid along the walls (s = 1/50: 0.1 sqrt(gH)).
+//              the push alone breaks the energy balance between them). The zero-pressure wall pushes
+//              a particle of uniform pressure back with half the force the liquid on its other side
+//              pushes it with. Without the growth with depth, a particle by a side wall misses the
+//              vertical pressure gradient of the kernel's part beyond it and slides along the wall.
+//              Why: docs/findings/sph.md.
 // Phi and its derivative are tabulated once per dimension (1024 points, linear interpolation). Near
 // a corner several walls are within reach: the mass beyond any of them is taken as 1 - prod_k (1 - Phi_k),
 // exact for one wall and for a kernel that factorises along the axes (a Gaussian); summing the
-// Phi_k instead counts the corner's quadrant twice, which read 9% above rho_0 at a 2D tank's corner
-// and kicked its particles at 1 m/s.
+// Phi_k instead counts the corner's quadrant twice and overestimates the density at corners.
 
 #include <vector>
 
@@ -51,9 +48,8 @@ class Boundary {
   /// (P_w(y) - P_i) grad W(x - y) dy, per unit rho_0, with the density kernel. For one wall at
   /// distance d with normal n into the liquid, exactly: (g . n) d Pi(d) n + Phi(d) g, with Phi the
   /// kernel mass beyond the wall and Pi its plane integral there. Near a corner the walls' terms are
-  /// summed, which counts the quadrant beyond both twice; measured against the integral over their
-  /// union (0.4 r and 0.3 r from two walls, 2D and 3D), the sum is 5% off and share()'s product rule
-  /// (the Phi g parts as (1 - prod_k (1 - Phi_k)) g) 6.6%: neither is exact, and the sum is simpler.
+  /// summed, which counts the quadrant beyond both twice; share()'s product rule is no more exact
+  /// here, and the sum is simpler (docs/findings/sph.md).
   Vec<Dim> hydrostatic_gradient(const Vec<Dim>& x, double r, KernelSet kernels, const Vec<Dim>& g) const;
 
   /// Both of the above from one walk over the walls (the pressure force needs both, and each walk

@@ -60,8 +60,7 @@ class SurfaceField {
   double spacing_ratio_ = 2.5, max_radius_ = 0.0;
   /// With a few distinct radii (levels), one tree per radius, each searched within its own radius:
   /// one search of `tree_` within the largest radius finds 2^max_level times too many particles
-  /// where the small ones crowd (redistancing a 3D dam break on levels 0-3 took 5 times as long
-  /// as on one level). Empty: one radius, or too many distinct ones; `tree_` is searched.
+  /// where the small ones crowd. Empty: one radius, or too many distinct ones; `tree_` is searched.
   std::vector<Group> groups_;
 };
 

@@ -8,29 +8,23 @@
 //   gbar_ij = (grad W(x_i - x_j, r_i) + grad W(x_i - x_j, r_j)) / 2 with W the pressure kernel
 //             (Wendland by default, spiky for the spiky and mueller sets), lbar_ij likewise for
 //             the viscosity kernel's Laplacian. By default (FluidConstants::mean_radius_gradient)
-//             gbar_ij = grad W(x_i - x_j, (r_i + r_j) / 2) instead, measured stiller at mixed sizes.
+//             gbar_ij = grad W(x_i - x_j, (r_i + r_j) / 2) instead, stiller at mixed sizes.
 //
 // The gradient is taken with respect to x_i: the paper writes x_ij = x_j - x_i, with which Eq. 1 as
 // printed would attract. Eq. 1 carries no 1/2 on (P_i + P_j), unlike Müller et al.'s force density;
 // with it the force is half of -grad P (the sum over j of (P_i + P_j)/2 grad W approximates grad P / 2),
 // and a tank settles at twice the compression; Eq. 1 is right.
 //
-// Three choices, measured on the still 2D tank of sph-hydrostatic (s = 1/50, c = 10 sqrt(2 g H),
-// mu = 5, after 0.3 s of damped settling; kinetic energy per metre after 1 s):
+// Three choices (why these defaults: docs/findings/sph.md):
 //   - kernels: Müller's poly6 density with the spiky pressure gradient (the paper's) is not the
-//     gradient of any energy, and the tank gains energy without bound (1e-3 -> 97 J); spiky for
-//     both: 0.02 J; Wendland C2 for both: 0.012 J. Default Wendland (smooth at 0, no pairing).
-//   - density: the paper's summation is quiet on one level, but a resampled tank starts with density
-//     errors of +-20% (a merged pair's mass sits closer to its neighbours than the lattice's) and
-//     explodes (10^3 J within 0.03 s, levels 0-3 without any further resampling). Carried by the
-//     continuity equation, with Molteni and Colagrossi's density diffusion (delta = 0.1), a split or
-//     merge keeps its parents' density: the same adaptive tank stays bounded (about 3 J, 0.4 m/s),
-//     the single one at 0.4-1.5 J. Continuity also needed dt <= 0.25 s / c (0.4 s / c grew without
-//     bound) while its rate was taken at the step's starting velocities (an explicit Euler step of
-//     sound waves; see FluidConstants::kicked_density_rate). Default continuity; summation one flag away.
+//     gradient of any energy, so a still tank gains energy without bound. Default Wendland C2 for
+//     both (smooth at 0, no pairing).
+//   - density: the paper's summation starts a resampled tank with large density errors (a merged
+//     pair's mass sits closer to its neighbours than the lattice's). Default: carried by the
+//     continuity equation with Molteni and Colagrossi's density diffusion, so a split or merge keeps
+//     its parents' density; summation is one flag away.
 //   - pressure form: `paper` is Eq. 1; `variational` replaces V_i V_j (P_i + P_j) with
-//     m_i m_j (P_i / rho_i^2 + P_j / rho_j^2) (equal to Eq. 1 where rho_i = rho_j); the two measured
-//     alike (0.023 and 0.014 J with spiky summation). Default Eq. 1.
+//     m_i m_j (P_i / rho_i^2 + P_j / rho_j^2) (equal to Eq. 1 where rho_i = rho_j). Default Eq. 1.
 // Every pair's force comes from the same symmetric expression on both sides, so f_ij = -f_ji to the
 // last bit and the forces sum to zero to round-off, for mixed sizes too.
 

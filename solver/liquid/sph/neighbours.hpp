@@ -129,19 +129,9 @@ NeighbourLists find_neighbours(const PointTree<Dim>& tree, std::span<const Vec<D
 template <int Dim>
 NeighbourLists find_neighbours_cells(std::span<const Vec<Dim>> x, std::span<const double> radius);
 
-/// automatic: the k-d tree for adaptive particles in 3D, the cell list otherwise. Measured
-/// (liquid-bench BM_SphNeighbours, 100k particles, medians of 5): one level, the cell list takes
-/// 23.7 ms against 80.3 in 2D and 180 against 244 in 3D; three levels, 24.0 against 44.7 in 2D but
-/// 191 against 143 in 3D, where cells as wide as the largest radius hold many candidates for the
-/// smallest particles. A multi-level cell list (cells as wide as the smallest radius, each particle
-/// scanning ceil(r_i / w) cells each way for the particles no larger than itself, each pair then
-/// added to the smaller one's list) was measured and not kept: three levels in 3D 234 ms against
-/// the tree's 179 (the same ratio as the single-width list's), one level 10-15% slower than it.
-/// Nor were per-radius grids (each radius its own cells as wide as itself, each particle scanning
-/// every grid within max(r_i, r_grid), cells culled by their distance): the same lists in the same
-/// time within this machine's noise (3D, 100k, three levels: 146-169 ms against 144-167). These
-/// figures predate the k-d search in leaf order with per-block buffers (README: neighbours 0.160 to
-/// 0.100 s a step on an adaptive 3D dam break); the choice has not been re-measured since.
+/// automatic: the k-d tree for adaptive particles in 3D, the cell list otherwise (in 3D, cells as
+/// wide as the largest radius hold many candidates for the smallest particles). Multi-level cell
+/// lists and per-radius grids were no faster. Why: docs/findings/sph.md.
 enum class NeighbourSearch { automatic, cell_list, kd_tree };
 const char* to_string(NeighbourSearch search);
 

@@ -104,8 +104,7 @@ struct Pass {
     double d = nominal;
     // Only a particle closer to x_i than 2d can come within d of a child d away from x_i: those are
     // gathered once per distance, and every direction is tested against them alone (the same test as
-    // clearance() < d, which scans every neighbour: at s = a/48 in 3D that made the resample phase
-    // 0.28 s a step).
+    // clearance() < d, which scans every neighbour and is far slower in 3D).
     std::vector<Vec<Dim>>& near = near_;
     const Vec<Dim> xi = p.x[i];
     const auto gather = [&](double reach) {
@@ -167,12 +166,9 @@ struct Pass {
   /// Merges i with the first marked neighbour of its level that can; false when none can.
   /// "First" is in index order, and the particles keep the seeding lattice's row order (splits and
   /// merges append), so on a lattice the pairs share one direction and the merged particles form a
-  /// coarser lattice. Two other rules were measured and not kept (2D dam break, s = 0.005, 1500
-  /// steps after settling; this rule: 20 splits and 18 merges, 1888 particles): the nearest marked
-  /// neighbour, 4772 splits, 3285 merges, 3223 particles; this rule after sorting the particles in
-  /// Morton order every redistancing step, 5743 splits, 5561 merges, 2938 particles (and no
-  /// speed gained at 9600 particles on one level: 9.17 against 9.33 ms a step). The likely cause,
-  /// not measured: pairs of mixed directions leave gaps that the next redistancing reads as surface.
+  /// coarser lattice. The nearest marked neighbour, or this rule on Morton-sorted particles, churn
+  /// through far more splits and merges (likely: pairs of mixed directions leave gaps that the next
+  /// redistancing reads as surface). Why: docs/findings/sph.md.
   bool merge(int i, const std::vector<char>& marked) {
     const int level = p.level[i];
     const double clear = sizes.spacing_of<Dim>(level + 1) / 2.0;  // r_new / (2h)

@@ -32,11 +32,8 @@ struct ResampleOptions {
   /// The paper's alpha = 2 and beta = 3 are for 3D, where a merged particle's radius grows by 2^(1/3):
   /// it merged at elfs > 3 r and splits again only below 2 * 2^(1/3) r = 2.52 r, a margin of 1.19.
   /// In 2D the radius grows by 2^(1/2), which leaves 3 against 2.83, a margin of 1.06, and a still
-  /// tank churned: near its surface particles split and merged every pass. beta = 3 * 2^(1/d - 1/3)
-  /// keeps the paper's margin in every dimension (2D: 3.37). Measured on sph-hydrostatic (2D,
-  /// s = 1/50, 0.5 s): with 3, 1539 splits and 1447 merges, density error 0.72%, spurious speed
-  /// 0.36 sqrt(gH), volume drift 5.9%; with 3.37, 124 and 84, 0.18%, 0.25 sqrt(gH), 1.6%, and 4%
-  /// fewer particles.
+  /// tank churns: near its surface particles split and merge every pass. beta = 3 * 2^(1/d - 1/3)
+  /// keeps the paper's margin in every dimension (2D: 3.37). Why: docs/findings/sph.md.
   static ResampleOptions for_dimension(int dim) {
     ResampleOptions o;
     o.beta = 3.0 * std::pow(2.0, 1.0 / dim - 1.0 / 3.0);

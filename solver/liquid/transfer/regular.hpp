@@ -12,7 +12,7 @@
 // face adds C_k . (x_f - x_p) to the particle's component; face -> particle sets
 // C_k = sum_f u_f grad w_f(x_p), which equals sum_f w_f u_f D_k^-1 (x_f - x_p) for multilinear
 // weights (D_k the per-component inertia tensor; Jiang et al., Sec. 5.3). With unit masses (or the
-// field "mass"), both transfers conserve linear momentum, and angular momentum measured as
+// field "mass"), both transfers conserve linear momentum, and angular momentum counted as
 // sum_p m_p (x_p x v_p + sum_k (D_k c_k) x e_k), exactly (up to round-off) wherever the stencils
 // are whole (particles at least a cell away from walls).
 //

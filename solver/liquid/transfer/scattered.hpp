@@ -12,9 +12,8 @@
 // cell; MLS solves one small least-squares problem per particle.
 //
 // Walls: a face on the domain boundary has particles on one side only, and its centre lies outside
-// them. Such faces reach `wall_rings` more rings (default 1): measured on the round trip of
-// transfer-accuracy (2D, finest row), L-inf 2.8e-2 with the paper's stencil and 5.8e-3 with one
-// more ring; wall_rings = 0 is the paper's stencil exactly.
+// them. Such faces reach `wall_rings` more rings (default 1, which cuts the round trip's error at
+// walls; wall_rings = 0 is the paper's stencil exactly). Why: docs/findings/transfers.md.
 //
 // Hard stencils are normal input. Too few or degenerate nodes lower the polynomial degree (counted).
 // Coincident nodes make the RBF system singular: the inverse-distance mean is used instead
@@ -22,8 +21,8 @@
 // never NaN. Clamping keeps each value within the range of its sources, against the overshoot of
 // scattered interpolants near walls, and is counted. It is on by default for face -> particle (as
 // in the paper, Sec. 7) and off for particle -> face: there a hanging face's centre often lies
-// outside its particles (the coarse side's particles are far), and clamping cuts the extrapolation
-// to first order (transfer-accuracy's round trip, 2D interior: order 0.67 clamped, 2.3 not).
+// outside its particles (the coarse side's particles are far), and clamping lowers the
+// extrapolation's order (docs/findings/transfers.md).
 
 #include <cstdint>
 #include <span>
@@ -50,9 +49,8 @@ struct TransferOptions {
   int wall_rings = 1;        ///< extra rings for particle -> face at domain-boundary faces
   /// Particle -> face: at most this many particles per stencil, the nearest to the face centre; 0
   /// means 4 times the polynomial terms, -1 no limit. A wall face's extra ring in 3D reaches a
-  /// hundred particles or more, and the saddle system's LU grows with their cube: the still pool's
-  /// particle -> face phase took 0.74 s a step (3D, 8k particles) without the limit, 0.044 s with.
-  /// Face -> particle keeps every face of its rings (limiting them cost accuracy, measured).
+  /// hundred particles or more, and the saddle system's LU grows with their cube. Face -> particle
+  /// keeps every face of its rings (limiting them costs accuracy). Why: docs/findings/transfers.md.
   int max_nodes = 0;
   /// Face -> particle (RBF): factorise each stencil shape once and share it between the cells with
   /// that layout of faces (rbf::InterpolantCache); false factorises every cell's own. The two agree
@@ -60,8 +58,8 @@ struct TransferOptions {
   bool share_factors = true;
   /// RBF: how each saddle system's condition is estimated before it is accepted (past 1e14 a
   /// stencil falls back to inverse-distance weights). The two fixed probes cost one solve where the
-  /// full Hager-Higham ascent takes up to ten; both accepted the same stencils in every run compared
-  /// (README, "Table 1"), so the results were the same bits.
+  /// full Hager-Higham ascent takes up to ten, and accept the same stencils in the runs compared
+  /// (docs/findings/table1.md).
   rbf::ConditionEstimate condition_estimate = rbf::ConditionEstimate::probes;
   int node_cap(int dim) const;     ///< the limit max_nodes stands for (0: none)
   rbf::Config rbf_config() const;  ///< the RBF kernel settings above

@@ -12,14 +12,14 @@
 // Measured: the particles' L-inf velocity error (the largest component) after the first step,
 // half-way and after the last (warned about past 0.1 of the peak speed). Every row's error grows:
 // the RBF pair does not smooth, so each step's interpolation error stays; the paper's pair in 3D
-// grows it geometrically instead (last / half-way 6 on the uniform tree), the faces' L-inf error after the
+// grows it geometrically instead; the faces' L-inf error after the
 // last step, the particles' kinetic energy over its value at seeding (volume-weighted shares,
 // particle_volumes), and the largest Lebesgue constant of the face -> particle stencils over the tree's cells
 // (the largest sum of |cardinal function| over each cell's corners, edge and face centres and centre: how
 // much an error in the face values can grow at a particle). Expected (asserted): the 2D rows and the 3D rows
 // with PHS r^3 + degree 1 keep the error below 0.3 (a flow of peak speed 1). Gated: the error after the last
-// step, per row. The paper's transfer in 3D is reported and warned about: measured on the adaptive tree, its
-// error grows from 0.07 after one step to 1.6 after 40 steps (README, "Flow studies").
+// step, per row. The paper's transfer in 3D is reported and warned about, since its error grows without
+// bound (docs/findings/transfer-stability.md).
 
 #include <cmath>
 

@@ -22,12 +22,13 @@
 // region, since outside it the adaptive tree's h is the regular runs' one level down.
 // Kinetic energy: APIC's counts its affine part (particle_affine_energy). Growth: the largest rise
 // above the start (max KE gain) and over any earlier value (largest KE rise).
+// Exact solution: the initial field, at every t (u and p above).
 // Expected (asserted): the particles' energy never grows above the start for PIC and APIC by more
 // than 5e-3 (the noise of the particle shares, see kinetic-energy). A rise over any earlier value is
-// reported and warned about over 5e-3 (measured: PIC 0 at levels 3-5 and 6.7e-4 at level 6, APIC
-// 1.1% at level 3); the runs reseed (kinetic-energy's fixed-mass runs measure a fixed system); RBF keeps more
-// energy than PIC at 4T on the finest row. The goal, adaptive RBF keeping at least 90% of APIC's
-// retained energy at 4T, is measured and printed with the verdict. How often the projection raised the face
+// reported and warned about over 5e-3 (the runs reseed; kinetic-energy's fixed-mass runs measure a
+// fixed system); RBF keeps more energy than PIC at 4T on the finest row. The target of adaptive RBF
+// keeping at least 90% of APIC's retained energy at 4T is printed with its verdict (figures:
+// docs/findings/flow-studies.md). How often the projection raised the face
 // velocities' kinetic energy is counted: on the uniform tree (D G, an orthogonal projection) it must not
 // (asserted, to 1e-6 relative: the PPE's tolerance). Gated: energy and enstrophy retained and the velocity
 // error at 4T, per method and level.

@@ -13,7 +13,7 @@
 // equal error is the uniform grid's time (and unknowns) interpolated in log-log to the adaptive
 // row's error, divided by the adaptive row's. Expected: at the finest row the adaptive tree needs
 // at least 3 times fewer unknowns than the uniform grid for the same error, and in 2D at least 3
-// times less time. In 3D the time gain is reported, not asserted (measured 1.2x: see below).
+// times less time. In 3D the time gain is reported, not asserted (see below).
 
 #include <cmath>
 
@@ -107,9 +107,9 @@ void study(const CaseOptions& options, Table& table, CaseResult& result, Json& s
       fmt::format("{}D finest row: the adaptive tree needs only {:.2f} times fewer unknowns than the "
                   "uniform grid at equal error (expected at least {})",
                   Dim, gain_unknowns, kGain));
-  // In 3D the time gain is not asserted: measured at 1.2x, because the degree-3 RBF-FD rows of an
-  // octree carry 40-100 nodes, so an adaptive unknown costs about 5 uniform ones in assembly and in
-  // each BiCGSTAB+ILUT iteration (see the table's assembly and solve columns).
+  // In 3D the time gain is not asserted: the degree-3 RBF-FD rows of an octree carry 40-100 nodes,
+  // so an adaptive unknown costs several uniform ones in assembly and in each BiCGSTAB+ILUT
+  // iteration (see the table's assembly and solve columns; docs/findings/poisson-convergence.md).
   if (Dim == 2)
     result.expect(gain_time >= kGain,
                   fmt::format("{}D finest row: the adaptive tree is only {:.2f} times faster "

@@ -12,7 +12,7 @@
 // Later rows split every cell of the first row's tree once more (the paper's recursive
 // subdivision); --rows rebuild builds each row's tree afresh instead.
 // Levels (base, quick / full): 2D 7:10 / 7:11, 3D 4:5 / 4:6. The 3D study is pre-asymptotic from
-// base level 3 (per-row p orders 1.30, 2.25, 1.80 over 3:6), so it starts at 4.
+// base level 3 (docs/findings/poisson-convergence.md), so it starts at 4.
 // Expected: L-inf order >= 1.9 for p and >= 1.8 for dp/dn at faces between unknowns.
 
 #include "studies/paper_studies.hpp"

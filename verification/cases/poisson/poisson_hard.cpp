@@ -7,8 +7,7 @@
 //     the uniform grid of their coarsest level L-1, which every cell refines. Their error against the
 //     graded tree (jump 1) of the same seed is reported, not checked: grading refines about twice the
 //     cells and leaves a quarter of the coarse ones, and the pinned Neumann error is a smooth field set
-//     by those coarse cells (at base level 6, seed 12: 1.6e-3 against 2.1e-4 at every cell level of
-//     the tree alike, while the uniform level-5 grid's is ~8e-4);
+//     by those coarse cells, the same at every cell level of the tree;
 //   - a narrow band where the finest cells touch cells four levels coarser;
 //   - a circle passing within 1e-6 h of a cell centre, against one passing 0.37 h from it;
 //   - a flat domain [0, pi] x [0, pi/64] whose cells are 64 times wider than tall, so every

@@ -15,11 +15,10 @@
 // cost (bigger stencils, bigger local systems).
 //
 // Expected. Degree 3 meets the floors (order >= 1.9 for p, >= 1.8 for dp/dn) in every study; the
-// quick tier does not assert the 3D Dirichlet one, which is pre-asymptotic from base level 3 (per
-// row p orders 1.30, 2.25, 1.80 over 3:6), and the full tier starts it at base level 4 (measured:
-// p 2.19, dp/dn 2.27 over 4:6, against 1.49 and 1.65 with degree 2). Degree 2 rows are reported
-// and gated against their accepted figures, not held to the floors: they are the paper's scheme,
-// kept here to show what the default's change of degree buys.
+// quick tier does not assert the 3D Dirichlet one, which is pre-asymptotic from base level 3, and
+// the full tier starts it at base level 4 (orders: docs/findings/rbf-fd-degree.md). Degree 2 rows
+// are reported and gated against their accepted figures, not held to the floors: they are the
+// paper's scheme, kept here to show what the default's change of degree buys.
 
 #include <fmt/format.h>
 

@@ -20,19 +20,14 @@
 // Expected: every AMG solve converges; BiCGSTAB+AMG's iterations are flat: the finest row within
 // 1.3 times the coarsest row's, per study, tree and tolerance; at 1e-10 its error equals the direct
 // solver's to 3 significant digits.
-// Flat iterations on the 3D adaptive Neumann matrices. With the default truncation (PMax 4)
-// BiCGSTAB+AMG takes 6, 9, 11 iterations at levels 3, 4, 5 (1e-6): the growth is interpolation
-// truncation on the pinned singular system (a diagonal shift of 1e-3 of the mean diagonal, which
-// removes the near-null space, makes the same settings flat: 6, 7, 7; strength 0.25-0.6, HMIS or
-// PMIS, MM-ext+i interpolation, 2 sweeps, a W-cycle, absolute-value strength and a deflation of the
-// constant vector did not). Untruncated interpolation is flat (6, 7, 7) but 63% slower at level 5
-// (570k unknowns: 22.9 s against 14.1 s). The default stays PMax 4, warned about when it grows;
-// flatness is asserted on the pmax0 rows. In the full tier (levels 3-5) even those grow at 1e-10: 9, 11,
-// 12 iterations, the residual falling 0.056, 0.090, 0.140 per iteration, so the full tier fails here
-// (a shifted matrix for BoomerAMG and the unpinned singular one were tried: README). Printed beside the
-// paper's comparison (Sec. 6): adaptive BiCGSTAB+Jacobi against regular PCG+Jacobi (paper: 2.6x faster),
-// adaptive BiCGSTAB+ILU against regular PCG+IC (2.5x faster, 3x fewer iterations), and the same with AMG on
-// both sides.
+// Flat iterations on the 3D adaptive Neumann matrices: with the default truncation (PMax 4)
+// BiCGSTAB+AMG's iterations grow with the level, from interpolation truncation on the pinned
+// singular system; untruncated interpolation is flat but slower. The default stays PMax 4, warned
+// about when it grows; flatness is asserted on the pmax0 rows. In the full tier even those grow at
+// 1e-10, so the full tier fails here. Figures and what was tried: docs/findings/amg.md.
+// Printed beside the paper's comparison (Sec. 6): adaptive BiCGSTAB+Jacobi against regular
+// PCG+Jacobi (paper: 2.6x faster), adaptive BiCGSTAB+ILU against regular PCG+IC (2.5x faster, 3x
+// fewer iterations), and the same with AMG on both sides.
 
 #include <algorithm>
 #include <cmath>

@@ -12,15 +12,15 @@
 // (x_front = the largest x of a particle plus half its spacing) against T for both and against the
 // experiment (Martin and Moyce 1952, Fig. 3, n^2 = 2, a = 2 1/4 in, as digitised in the literature),
 // and the largest relative difference of the adaptive front from the single one over the run.
-// Expected (the goals, reported rather than asserted at this size): adaptive at least 4 times
-// fewer particles and 3 times faster in 3D; front within 5% of single. Asserted: both runs finish
+// Expected (targets, reported rather than asserted at this size): adaptive at least 4 times fewer
+// particles and 3 times faster in 3D; front within 5% of single. Asserted: both runs finish
 // without a non-finite value, the adaptive one with fewer particles on average, and both fronts
 // within 25% of the experiment from T = 1.2 on (SPH without a free-surface correction runs ahead
 // early, and the experiment's own gate opening delays its start).
 // Gated: particles (mean) and both fronts' largest distance from the experiment; in the quick tier the
 // adaptive ones are medians over 5 runs with different split-direction seeds (one run's figures move
 // by more than the gate's tolerance when a sum is merely reordered). The adaptive front's distance from
-// the single one is asserted below 5% for every seed in the quick tier (measured 0.7-1.1%), not gated.
+// the single one is asserted below 5% for every seed in the quick tier, not gated.
 
 #include <algorithm>
 #include <cmath>
@@ -199,7 +199,7 @@ CaseResult run_case(double s, int seeds, const std::string& tag, Json& series) {
                                *std::max_element(particles.begin(), particles.end()))));
   if (memory < 4.0 || speed < 3.0 || worst_pair > 0.05)
     result.warnings.push_back(
-        fmt::format("the issue's goals (4x fewer particles, 3x faster, front within 5%) are "
+        fmt::format("the targets (4x fewer particles, 3x faster, front within 5%) are "
                     "not met at this size: {:.2f}x, {:.2f}x, {:.1f}%",
                     memory, speed, 100 * worst_pair));
   result.expect(adaptive.particles < single.particles,
@@ -212,12 +212,12 @@ CaseResult run_case(double s, int seeds, const std::string& tag, Json& series) {
       {tag + "adaptive particles (mean)", seeds > 1 ? GateFigure::Kind::error : GateFigure::Kind::count,
        std::round(adaptive.particles)});  // a median over seeds moves by a few: a cost, not a count
   // The adaptive front's distance from the single one is a small difference that moves by a third
-  // between seeds (0.7-1.1% at the quick size): asserted against the 5% per seed, not gated.
+  // between seeds: asserted against the 5% target per seed, not gated.
   if (seeds > 1)
     for (int k = 0; k < seeds; ++k)
       result.expect(from_single[k] < 0.05,
                     fmt::format("adaptive (seed {}): front up to {:.1f}% from the single "
-                                "run's, more than the issue's 5%",
+                                "run's, more than the 5% target",
                                 1 + k, 100 * from_single[k]));
   result.gate.push_back({tag + "single front from experiment", GateFigure::Kind::error, worst_single});
   result.gate.push_back({tag + "adaptive front from experiment", GateFigure::Kind::error, worst_adaptive});

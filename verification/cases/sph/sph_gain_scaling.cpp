@@ -1,6 +1,6 @@
 // Case sph-gain-scaling: how the adaptive gain grows with resolution, at sizes a full dam break
-// cannot afford here (Adams et al. 2007, Table 1; the goal: 4 times fewer particles and
-// 3 times faster in 3D).
+// cannot afford here (Adams et al. 2007, Table 1; the target: 4 times fewer particles and 3 times
+// faster in 3D).
 //
 // Problem. sph-adaptivity-gain's dam break: a column a wide and 2a high (a = 0.2 m) in the corner
 // of a tank [0, 5a] x [0, 3a] (3D: 2a deep, the column filling the depth), seeded as a lattice of
@@ -70,7 +70,7 @@ struct Contender {
 /// Both runs of size s, `steps` steps each, taken in alternating windows of one resampling period
 /// (5 steps, one resampling each), so that a slow spell of this shared machine falls on both: the
 /// speed gain is the median over window pairs of their ratio, the seconds a step the medians of each
-/// run's windows. (Run one after the other, a 3D run at a/64 measured 2.80 once and 1.84 once.)
+/// run's windows (run one after the other, the gain moves with the machine's load).
 template <int Dim>
 std::pair<Sample, Sample> run_both(double s, int steps, double& speed_gain) {
   Contender<Dim> single(false, s), adaptive(true, s);
@@ -166,7 +166,7 @@ CaseResult run_full(const CaseOptions&) {
 LIQUID_VERIFICATION_CASE(
     {"sph-gain-scaling",
      "SPH dam break start, single against adaptive at 2D s = a/20..a/320 and 3D s = a/16..a/80: memory and "
-     "speed gains against resolution, extrapolated to the issue's goal",
+     "speed gains against resolution, extrapolated to the target (4x fewer particles, 3x faster)",
      false, run_full, no_options});
 
 }  // namespace liquid::verification
