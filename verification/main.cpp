@@ -26,6 +26,7 @@
 #include "common/gate.hpp"
 #include "common/record.hpp"
 #include "liquid/core/error.hpp"
+#include "liquid/core/threads.hpp"
 #include "liquid/core/timer.hpp"
 #include "options.hpp"
 #include "user_poisson.hpp"
@@ -59,6 +60,7 @@ RunOutcome run_case(const lv::CaseInfo& info, const lv::CaseOptions& options, co
 }  // namespace
 
 int main(int argc, char** argv) {
+  liquid::use_passive_waiting(argv);
   CLI::App app{"liquid-verify: verification cases of the liquid solvers"};
   app.require_subcommand(1);
 
@@ -144,6 +146,7 @@ int main(int argc, char** argv) {
       if (run->count("--md")) lv::check_output_path("--md", md_path);
       const lv::CaseOptions options = lv::case_options(flags, *info);
       fmt::print("{}\n", lv::echo(case_name, flags));
+      fmt::print("  threads: {}\n", liquid::thread_summary());
       return run_case(*info, options, json_path, md_path).passed ? 0 : 1;
     }
     if (*suite) {
@@ -151,6 +154,7 @@ int main(int argc, char** argv) {
       LIQUID_VERIFY(!out_dir.empty(), "--out: the folder name is empty");
       lv::check_output_path("--out", (std::filesystem::path(out_dir) / "summary.json").string());
       fmt::print("liquid-verify suite {} --out {}\n", suite_name, out_dir);
+      fmt::print("  threads: {}\n", liquid::thread_summary());
       lv::Json summary = lv::Json::object();
       summary.set("suite", suite_name);
       lv::Json cases = lv::Json::array();
@@ -181,6 +185,7 @@ int main(int argc, char** argv) {
       if (poisson->count("--md")) lv::check_output_path("--md", user_md);
       const std::string command = lv::describe(user);
       fmt::print("{}\n", command);
+      fmt::print("  threads: {}\n", liquid::thread_summary());
       const lv::CaseInfo info{"poisson-user", command, false,
                               [&](const lv::CaseOptions&) { return lv::run_user_poisson(user); },
                               lv::no_options};
@@ -198,6 +203,7 @@ int main(int argc, char** argv) {
                       "--perturb: case '{}' has no perturbation (it fixes its own scheme)", name);
       fmt::print("liquid-verify gate --suite {} --reference {}{}{}\n", gate_suite, reference_dir,
                  bless ? " --bless" : "", perturb.empty() ? "" : " --perturb " + perturb);
+      fmt::print("  threads: {}\n", liquid::thread_summary());
       int n_failed = 0, n_run = 0;
       for (const auto& c : lv::case_registry()) {
         const bool chosen = gate_cases.empty()

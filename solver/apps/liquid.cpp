@@ -23,6 +23,7 @@
 #include <limits>
 
 #include "liquid/core/error.hpp"
+#include "liquid/core/threads.hpp"
 #include "liquid/linalg/solver.hpp"
 #include "liquid/scene/runner.hpp"
 #include "liquid/scene/sph_runner.hpp"
@@ -61,7 +62,7 @@ void echo_time_and_output(const SceneTime& time, const SceneOutput& output, cons
                settings.checkpoint_every > 0
                    ? fmt::format(", a checkpoint every {} steps", settings.checkpoint_every)
                    : "");
-  fmt::print("  threads     {}\n", omp_get_max_threads());
+  fmt::print("  threads     {}\n", thread_summary());
   std::fflush(stdout);
 }
 
@@ -73,9 +74,9 @@ void echo(const Scene<Dim>& s, const RunSettings& settings, bool resumed) {
   fmt::print("  domain      [{}] to [{}]\n", fmt::join(o.domain.lo.data(), o.domain.lo.data() + Dim, ", "),
              fmt::join(o.domain.hi.data(), o.domain.hi.data() + Dim, ", "));
   fmt::print("  grid        {}; finest level {} (h = {:.4g}), coarse {}, band {}, level jump {}\n",
-             o.adaptive ? "adaptive tree" : "regular grid", o.fine_level,
-             std::ldexp(o.domain.size().minCoeff(), -o.fine_level),
-             o.adaptive ? o.coarse_level : o.fine_level, o.band,
+             o.adaptive ? "adaptive tree" : "regular grid", o.finest_level,
+             std::ldexp(o.domain.size().minCoeff(), -o.finest_level),
+             o.adaptive ? o.coarse_level : o.finest_level, o.band,
              o.max_jump >= unlimited_jump ? std::string("unlimited") : std::to_string(o.max_jump));
   const bool rbf_transfer = o.transfer == PicTransfer::rbf;
   fmt::print("  method      {}{}; {}; reseeding {}{}{}{}\n", to_string(o.transfer),
@@ -86,12 +87,24 @@ void echo(const Scene<Dim>& s, const RunSettings& settings, bool resumed) {
                  ? "; full Hager-Higham condition estimates"
                  : "",
              o.poisson.nullspace == mac::Nullspace::pin ? "; a closed box's PPE pinned at one cell" : "");
-  if (rbf_transfer && (o.rbf.exponent != 5 || o.rbf.degree != 2))
-    fmt::print("  transfer    PHS r^{} + degree {} (the paper's: r^5 + degree 2)\n", o.rbf.exponent,
-               o.rbf.degree);
-  if (o.reseed && o.reseeding.lo == 1 && o.reseeding.hi == std::numeric_limits<int>::max())
-    fmt::print("  reseeding   holes only (the paper's replaces every particle of a cell outside [{}, {}])\n",
-               Dim == 2 ? 3 : 5, Dim == 2 ? 12 : 15);
+  if (rbf_transfer)
+    fmt::print("  transfer    PHS r^{} + degree {}{}\n", o.rbf.exponent, o.rbf.degree,
+               s.paper_preset ? " (the paper's preset)" : "");
+  if (o.reseed && rbf_transfer) {
+    const bool holes = (o.reseeding.lo == 0 && o.reseeding.hi == 0) ||
+                       (o.reseeding.lo == 1 && o.reseeding.hi == std::numeric_limits<int>::max());
+    if (holes)
+      fmt::print(
+          "  reseeding   holes only (--paper: the paper's, which replaces every particle of a cell "
+          "outside [{}, {}])\n",
+          Dim == 2 ? 3 : 5, Dim == 2 ? 12 : 15);
+    else
+      fmt::print("  reseeding   {} the particles of a cell outside [{}, {}]{}\n",
+                 o.reseeding.keep ? "thins or tops up" : "replaces",
+                 o.reseeding.lo > 0 ? o.reseeding.lo : (Dim == 2 ? 3 : 5),
+                 o.reseeding.hi > 0 ? o.reseeding.hi : (Dim == 2 ? 12 : 15),
+                 s.paper_preset ? " (the paper's preset)" : "");
+  }
   fmt::print("  surface     {}\n",
              o.surface == PicSurface::air_cells
                  ? std::string("p = 0 at the air cells' centres")
@@ -158,9 +171,9 @@ class Progress {
     const Scene<Dim>& s = run.scene();
     const AdaptivePic<Dim>& sim = run.solver();
     const PicStepReport& r = run.last();
-    show(fraction(s, sim.step(), sim.time()),
+    show(fraction(s, sim.steps(), sim.time()),
          fmt::format("t = {:.4f} s  step {}  particles {}  cells {} ({} fluid)  {:.3f} s/step", sim.time(),
-                     sim.step(), r.n_particles, r.n_cells, r.n_fluid_cells, per_step(sim.timer())),
+                     sim.steps(), r.n_particles, r.n_cells, r.n_fluid_cells, per_step(sim.timer())),
          last);
   }
   template <int Dim>
@@ -393,7 +406,7 @@ int run_scene(const Args& a, const std::string& scene_path) {
   }
   if (!a.resume.empty()) {
     echo<Dim>(run->scene(), settings, true);
-    fmt::print("  continuing from step {} (t = {:.6g} s)\n", run->solver().step(), run->solver().time());
+    fmt::print("  continuing from step {} (t = {:.6g} s)\n", run->solver().steps(), run->solver().time());
   }
   run_to_end(*run, a);
   const RunSummary s = run->summary();
@@ -408,7 +421,7 @@ template <int Dim>
 void print_scene_row(const std::string& name, const std::string& path) {
   const Scene<Dim> s = load_scene<Dim>(path);
   const std::string grid =
-      s.sph ? std::string("particles") : fmt::format("{} / {}", s.pic.coarse_level, s.pic.fine_level);
+      s.sph ? std::string("particles") : fmt::format("{} / {}", s.pic.coarse_level, s.pic.finest_level);
   const std::string length =
       std::isfinite(s.time.end) ? fmt::format("{:g} s", s.time.end) : fmt::format("{} steps", s.time.steps);
   const std::string method =
@@ -435,6 +448,7 @@ void print_scene_table() {
 }  // namespace
 
 int main(int argc, char** argv) {
+  use_passive_waiting(argv);
   CLI::App app{
       "liquid: the adaptive RBF liquid solver, its regular PIC/FLIP/APIC baselines, and adaptive SPH"};
   app.require_subcommand(1);
@@ -472,6 +486,8 @@ int main(int argc, char** argv) {
                                 "run on a regular grid at the finest level (SPH: single resolution)");
   run->add_flag("--adaptive", a.adaptive, "run on the adaptive tree (rbf) or with adaptive particles (sph)")
       ->excludes(regular);
+  run->add_flag("--paper", a.overrides.paper,
+                "the paper's exact transfer (PHS r^5 + degree 2) and reseeding, instead of the defaults");
   run->add_option("--finest", a.overrides.finest, "finest level (the coarse level moves with it)")
       ->check(CLI::Range(1, 20));
   run->add_option("--json", a.json, "write the summary (Table 1 row, phases) as JSON to FILE");
@@ -508,9 +524,10 @@ int main(int argc, char** argv) {
       LIQUID_VERIFY(
           a.overrides.method.empty() && a.overrides.adaptive < 0 && a.overrides.finest < 0 &&
               a.overrides.steps < 0 && a.overrides.until < 0 && a.overrides.surface.empty() &&
-              a.overrides.solver.empty() && a.overrides.amg_reuse == -1 && a.overrides.spacing == -1,
+              a.overrides.solver.empty() && a.overrides.amg_reuse == -1 && a.overrides.spacing == -1 &&
+              !a.overrides.paper,
           "liquid run --resume continues the saved run as it was: --method, --regular, --adaptive, --finest, "
-          "--spacing, --surface, --solver, --amg-reuse, --steps and --until are refused with it");
+          "--spacing, --surface, --solver, --amg-reuse, --paper, --steps and --until are refused with it");
     LIQUID_VERIFY(a.checkpoint_every == 0 || !a.out.empty(),
                   "liquid run: --checkpoint-every needs an output folder (--out DIR)");
     int dim = 0;

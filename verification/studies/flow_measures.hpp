@@ -10,19 +10,21 @@
 
 namespace liquid::verification {
 
-/// One method of a flow study: the adaptive tree or a uniform one, and the transfer.
+/// One method of a flow study: the adaptive tree or a uniform one, the transfer, and whether it runs
+/// the paper's preset (PicOptions::apply_paper_preset) instead of the defaults.
 struct FlowMethod {
   const char* name;
   bool adaptive;
   PicTransfer transfer;
+  bool paper = false;
 };
-/// The flow studies' methods, side by side: the paper's adaptive RBF, the same transfer on the
-/// uniform tree, and the regular baselines PIC, FLIP and APIC.
-inline const FlowMethod kFlowMethods[] = {{"adaptive-rbf", true, PicTransfer::rbf},
-                                          {"regular-rbf", false, PicTransfer::rbf},
-                                          {"regular-pic", false, PicTransfer::pic},
-                                          {"regular-flip", false, PicTransfer::flip},
-                                          {"regular-apic", false, PicTransfer::apic}};
+/// The flow studies' methods, side by side: adaptive RBF with the default transfer and reseeding,
+/// the same with the paper's preset, RBF on the uniform tree, and the regular baselines PIC, FLIP and
+/// APIC.
+inline const FlowMethod kFlowMethods[] = {
+    {"adaptive-rbf", true, PicTransfer::rbf},   {"adaptive-rbf-paper", true, PicTransfer::rbf, true},
+    {"regular-rbf", false, PicTransfer::rbf},   {"regular-pic", false, PicTransfer::pic},
+    {"regular-flip", false, PicTransfer::flip}, {"regular-apic", false, PicTransfer::apic}};
 
 /// How often a run's projections raised the kinetic energy of the face velocities
 /// (PicStepReport::grid_energy_before/after), and by how much at most (relative).

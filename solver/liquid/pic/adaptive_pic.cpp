@@ -70,18 +70,18 @@ template <int Dim>
 CellGraphOptions<Dim> graph_options(const PicOptions<Dim>& o) {
   CellGraphOptions<Dim> g;
   g.max_jump = o.max_jump;
-  g.min_level = o.adaptive ? std::min(o.coarse_level, o.fine_level) : o.fine_level;
-  g.max_level = o.fine_level;
+  g.min_level = o.adaptive ? std::min(o.coarse_level, o.finest_level) : o.finest_level;
+  g.max_level = o.finest_level;
   return g;
 }
 
 template <int Dim>
 CellGraph<Dim> initial_graph(const PicOptions<Dim>& o) {
   LIQUID_VERIFY(o.domain.valid(), "PIC: the domain is empty");
-  LIQUID_VERIFY(o.fine_level >= 1 && o.fine_level <= morton::max_level<Dim>,
-                "PIC: fine level {} is outside [1, {}]", o.fine_level, morton::max_level<Dim>);
-  LIQUID_VERIFY(!o.adaptive || (o.coarse_level >= 0 && o.coarse_level <= o.fine_level),
-                "PIC: coarse level {} must be in [0, fine level {}]", o.coarse_level, o.fine_level);
+  LIQUID_VERIFY(o.finest_level >= 1 && o.finest_level <= morton::max_level<Dim>,
+                "PIC: fine level {} is outside [1, {}]", o.finest_level, morton::max_level<Dim>);
+  LIQUID_VERIFY(!o.adaptive || (o.coarse_level >= 0 && o.coarse_level <= o.finest_level),
+                "PIC: coarse level {} must be in [0, fine level {}]", o.coarse_level, o.finest_level);
   LIQUID_VERIFY(o.max_jump >= 1, "PIC: level jump limit {} (need at least 1)", o.max_jump);
   LIQUID_VERIFY(o.band >= 0, "PIC: band {} is negative", o.band);
   LIQUID_VERIFY(!o.adaptive || o.transfer == PicTransfer::rbf,
@@ -95,7 +95,7 @@ CellGraph<Dim> initial_graph(const PicOptions<Dim>& o) {
                 to_string(o.projection));
   LIQUID_VERIFY(o.min_face_mass > 0.0 && o.min_face_mass <= 1.0, "PIC: min_face_mass {} is outside (0, 1]",
                 o.min_face_mass);
-  return tree::uniform<Dim>(o.domain, o.adaptive ? o.coarse_level : o.fine_level, graph_options(o));
+  return tree::uniform<Dim>(o.domain, o.adaptive ? o.coarse_level : o.finest_level, graph_options(o));
 }
 
 }  // namespace
@@ -103,6 +103,10 @@ CellGraph<Dim> initial_graph(const PicOptions<Dim>& o) {
 template <int Dim>
 AdaptivePic<Dim>::AdaptivePic(const PicOptions<Dim>& options)
     : options_(options), graph_(initial_graph(options)) {
+  if (options_.transfer == PicTransfer::rbf && options_.reseeding.lo == 0 && options_.reseeding.hi == 0) {
+    options_.reseeding.lo = 1;  // holes only: a cell is refilled when the step left it empty
+    options_.reseeding.hi = std::numeric_limits<int>::max();
+  }
   if (options_.transfer != PicTransfer::rbf) lattice_ = std::make_unique<RegularLattice<Dim>>(graph_);
   if (options_.transfer == PicTransfer::apic) apic_field_ = particles_.add_field("apic", Dim * Dim);
   u_.assign(graph_.face_capacity(), 0.0);
@@ -120,7 +124,7 @@ AdaptivePic<Dim>::AdaptivePic(AdaptivePic&&) noexcept = default;
 
 template <int Dim>
 double AdaptivePic<Dim>::finest_h() const {
-  return std::ldexp(graph_.domain().size().minCoeff(), -options_.fine_level);
+  return std::ldexp(graph_.domain().size().minCoeff(), -options_.finest_level);
 }
 
 template <int Dim>
@@ -129,7 +133,7 @@ void AdaptivePic<Dim>::seed(const levelset::Function<Dim>& liquid,
   LIQUID_VERIFY(!seeded_, "PIC: seed() was already called");
   seeded_ = true;
   if (options_.adaptive) {
-    graph_ = tree::narrow_band<Dim>(options_.domain, liquid, options_.coarse_level, options_.fine_level,
+    graph_ = tree::narrow_band<Dim>(options_.domain, liquid, options_.coarse_level, options_.finest_level,
                                     options_.band + 1.0, graph_options(options_));
   }
   const VelocitySource<Dim> source = [&](std::span<const Vec<Dim>> x, std::span<const CellId>,
@@ -148,7 +152,7 @@ void AdaptivePic<Dim>::seed(const levelset::Function<Dim>& liquid,
   // Settle the band on the solver's own rule (surface cells, band hops) before the first step.
   bool changed = false;
   if (options_.adaptive)
-    for (int round = 0; round <= options_.fine_level - options_.coarse_level; ++round) {
+    for (int round = 0; round <= options_.finest_level - options_.coarse_level; ++round) {
       classify();
       PicStepReport r;
       adapt_grid(r);
@@ -206,10 +210,10 @@ void AdaptivePic<Dim>::restore(const PicState<Dim>& s) {
   LIQUID_VERIFY(graph.domain().lo == options_.domain.lo && graph.domain().hi == options_.domain.hi,
                 "PIC: the saved state's domain differs from the scene's");
   LIQUID_VERIFY(
-      graph.options().max_jump == options_.max_jump && graph.options().max_level == options_.fine_level &&
+      graph.options().max_jump == options_.max_jump && graph.options().max_level == options_.finest_level &&
           graph.options().min_level == graph_options(options_).min_level,
       "PIC: the saved state's tree (jump {}, finest level {}) differs from the options' (jump {}, finest {})",
-      graph.options().max_jump, graph.options().max_level, options_.max_jump, options_.fine_level);
+      graph.options().max_jump, graph.options().max_level, options_.max_jump, options_.finest_level);
   const std::size_t n = s.particle_cell.size();
   LIQUID_VERIFY(s.x.size() == n * Dim && s.v.size() == n * Dim,
                 "PIC: the saved state has {} positions and {} velocities for {} particles", s.x.size() / Dim,
@@ -346,7 +350,7 @@ void AdaptivePic<Dim>::adapt_grid(PicStepReport& r) {
           break;
         }
   }
-  pic::mark_band<Dim>(graph_, centres, options_.band, options_.coarse_level, options_.fine_level, marks);
+  pic::mark_band<Dim>(graph_, centres, options_.band, options_.coarse_level, options_.finest_level, marks);
   if (marks.empty()) return;
   // Interior fluid cells about to split: their empty children are liquid and get particles.
   std::vector<std::uint8_t> interior(graph_.cell_capacity(), 0);
@@ -460,8 +464,8 @@ void AdaptivePic<Dim>::assemble(double dt) {
     // The split projection's mass pass keeps the surface its gravity pass built: same particles, same step.
     const bool built_this_step = options_.projection == PicProjection::split && !volume_pass_ && surface_;
     if (!built_this_step)
-      surface_ = std::make_unique<pic::ParticleSurface<Dim>>(graph_, cls_, particles_.x, options_.fine_level,
-                                                             options_.surface_radius);
+      surface_ = std::make_unique<pic::ParticleSurface<Dim>>(graph_, cls_, particles_.x,
+                                                             options_.finest_level, options_.surface_radius);
     std::vector<std::uint8_t> seen(graph_.cell_capacity(), 0);
     const auto consider = [&](CellId c) {
       if (seen[c] || cls_.is_solid(c)) return;

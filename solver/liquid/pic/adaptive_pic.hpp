@@ -11,7 +11,7 @@
 // solids, free-slip: the normal velocity is zero there. The divergence is the finite-volume flux sum (it
 // conserves: mac/divergence.hpp); the Laplacian is mac's (FD where regular, RBF-FD at T-junctions).
 //
-//   PicOptions<2> o;  o.domain = ...;  o.coarse_level = 3;  o.fine_level = 6;
+//   PicOptions<2> o;  o.domain = ...;  o.coarse_level = 3;  o.finest_level = 6;
 //   AdaptivePic<2> sim(o);
 //   sim.seed(levelset::box<2>(...));
 //   while (sim.time() < 2.0) sim.advance(sim.stable_dt(1.0, 0.01));
@@ -88,7 +88,7 @@ struct PicOptions {
   Box<Dim> domain{Vec<Dim>::Zero(), Vec<Dim>::Ones()};
   bool adaptive = true;  ///< false: a uniform tree at fine_level (the regular baselines)
   int coarse_level = 3;  ///< level of the liquid's interior, far from the surface (adaptive)
-  int fine_level = 6;    ///< level of the band around the surface
+  int finest_level = 6;  ///< level of the band around the surface (scene key grid.finest)
   int band = 2;          ///< cells within this many face hops of a surface cell are at fine_level
   int max_jump = 2;      ///< level jump limit between face neighbours (1-4, or unlimited_jump)
   Vec<Dim> gravity = default_gravity();
@@ -108,7 +108,9 @@ struct PicOptions {
   double advect_cfl = 1.0;  ///< advection substeps keep |v| dt_sub <= advect_cfl * finest h
   int extrapolation_layers = 4;
   bool reseed = true;
-  ReseedOptions reseeding;  ///< ranges [3, 12] (2D) and [5, 15] (3D) by default
+  /// Ranges left at 0 take the method's default: holes only (lo 1, no hi) with the RBF transfer,
+  /// [3, 12] (2D) and [5, 15] (3D) with PIC, FLIP and APIC.
+  ReseedOptions reseeding;
   mac::PoissonOptions poisson = paper_poisson();
   linalg::SolveOptions solver{linalg::SolverKind::bicgstab_ilut, 1e-8};
   bool continue_on_ppe_failure = false;  ///< false: a PPE that does not converge stops the run
@@ -135,13 +137,32 @@ struct PicOptions {
     p.nullspace = mac::Nullspace::zero_mean;  // see above
     return p;
   }
-  /// The paper's RBF transfer with particle -> face clamping on. Without it the interpolant's
-  /// extrapolation at free-surface and hanging faces feeds on itself and a dam break blows up; the
-  /// price is a lower order of a single transfer. Why: docs/findings/transfer-stability.md.
+  /// The default RBF transfer: PHS r^3 with degree 1 and particle -> face clamping on. The paper's
+  /// r^5 + degree 2 pair amplifies noise on 3D trees until a still pool moves; clamping keeps the
+  /// interpolant's extrapolation at free-surface and hanging faces from feeding on itself. Why:
+  /// docs/findings/transfer-stability.md.
   static TransferOptions stable_rbf() {
     TransferOptions t = TransferOptions::paper_rbf();
+    t.exponent = 3;
+    t.degree = 1;
     t.clamp_faces = true;
     return t;
+  }
+  /// The paper's exact transfer and reseeding (scene key `[solver] preset = "paper"`, `liquid run
+  /// --paper`): PHS r^5 + degree 2 transfers, and reseeding that replaces the particles of every
+  /// cell holding fewer than 3 (2D) / 5 (3D) or more than 12 / 15. The default differs (r^3 + degree
+  /// 1, holes-only reseeding for the RBF transfer): docs/findings/transfer-stability.md.
+  void apply_paper_preset() {
+    rbf.exponent = 5;
+    rbf.degree = 2;
+    reseeding.lo = Dim == 2 ? 3 : 5;
+    reseeding.hi = Dim == 2 ? 12 : 15;
+    reseeding.keep = false;
+  }
+  /// True when the transfer and reseeding are the paper's preset (what apply_paper_preset() sets).
+  bool paper_preset() const {
+    return rbf.exponent == 5 && rbf.degree == 2 && reseeding.lo == (Dim == 2 ? 3 : 5) &&
+           reseeding.hi == (Dim == 2 ? 12 : 15) && !reseeding.keep;
   }
   static Vec<Dim> default_gravity() {
     Vec<Dim> g = Vec<Dim>::Zero();
@@ -239,7 +260,7 @@ class AdaptivePic {
   /// the solution (the pressure), not the right-hand side.
   const mac::PoissonSystem<Dim>& pressure_system() const { return system_; }
   double time() const { return time_; }
-  long step() const { return step_; }
+  long steps() const { return step_; }  ///< steps taken
   double finest_h() const;
 
  private:

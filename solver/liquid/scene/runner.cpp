@@ -77,6 +77,7 @@ void put_run_settings(io::ArchiveWriter& w, const RunSettings& settings, const s
   w.put_scalar("overrides/until", o.until);
   w.put_string("overrides/surface", o.surface.empty() ? "-" : o.surface);
   w.put_scalar("overrides/spacing", o.spacing);
+  w.put_scalar("overrides/paper", static_cast<std::int64_t>(o.paper));
   w.put_scalar("run/checkpoint_every", static_cast<std::int64_t>(settings.checkpoint_every));
 }
 
@@ -91,6 +92,7 @@ void get_run_settings(const io::ArchiveReader& r, RunSettings& settings) {
   o.surface = r.string("overrides/surface") == "-" ? "" : r.string("overrides/surface");
   // Checkpoints written before SPH runs existed lack the spacing: they kept the scene's.
   o.spacing = r.has("overrides/spacing") ? r.scalar_double("overrides/spacing") : -1;
+  o.paper = r.has("overrides/paper") && r.scalar_int("overrides/paper") != 0;
   if (settings.checkpoint_every == 0) settings.checkpoint_every = r.scalar_int("run/checkpoint_every");
   LIQUID_VERIFY(std::filesystem::is_regular_file(settings.scene_path),
                 "{}: its scene file {} is gone; a checkpoint needs the scene it was made from", r.path(),
@@ -149,7 +151,7 @@ void apply_overrides(const SceneOverrides& o, Scene<Dim>& scene) {
       LIQUID_VERIFY(scene.grid_given, "{}: method '{}' runs on a grid, and the scene has no [grid] table",
                     scene.path, o.method);
       p.transfer = parse_pic_transfer(o.method);
-      if (p.transfer != PicTransfer::rbf) p.adaptive = false;
+      if (p.transfer != PicTransfer::rbf) scene.adaptive = p.adaptive = false;
     }
     if (was_sph != scene.sph && !scene.output.fields_given)
       scene.output.fields = scene.sph ? SceneOutput::sph_fields() : SceneOutput::pic_fields();
@@ -164,7 +166,14 @@ void apply_overrides(const SceneOverrides& o, Scene<Dim>& scene) {
   const std::string wrong = field_not_written(scene.output.fields, scene.sph);
   LIQUID_VERIFY(wrong.empty(), "{}: output.fields names '{}', which method {} does not write", scene.path,
                 wrong, scene.method());
-  if (o.adaptive >= 0) p.adaptive = o.adaptive == 1;
+  if (o.adaptive >= 0) scene.adaptive = p.adaptive = o.adaptive == 1;
+  if (o.paper) {
+    LIQUID_VERIFY(!scene.sph,
+                  "--paper: the paper's preset is the PIC solver's transfer and reseeding; an "
+                  "SPH run has neither");
+    p.apply_paper_preset();
+    scene.paper_preset = true;
+  }
   if (!o.surface.empty()) {
     if (scene.sph) {
       bool found = false;
@@ -214,9 +223,9 @@ void apply_overrides(const SceneOverrides& o, Scene<Dim>& scene) {
   if (o.finest >= 0) {
     LIQUID_VERIFY(o.finest >= 1 && o.finest <= morton::max_level<Dim>, "--finest {} is outside [1, {}]",
                   o.finest, morton::max_level<Dim>);
-    const int shift = o.finest - p.fine_level;
-    p.fine_level = o.finest;
-    p.coarse_level = std::clamp(p.coarse_level + shift, 0, p.fine_level);
+    const int shift = o.finest - p.finest_level;
+    p.finest_level = o.finest;
+    p.coarse_level = std::clamp(p.coarse_level + shift, 0, p.finest_level);
   }
   if (o.steps >= 0) {
     LIQUID_VERIFY(o.steps >= 1, "--steps {} must be at least 1", o.steps);
@@ -263,7 +272,7 @@ SceneRunner<Dim>::SceneRunner(SceneRunner&&) noexcept = default;
 
 template <int Dim>
 bool SceneRunner<Dim>::done() const {
-  return detail::run_done(scene_.time, sim_->step(), sim_->time());
+  return detail::run_done(scene_.time, sim_->steps(), sim_->time());
 }
 
 template <int Dim>
@@ -287,7 +296,7 @@ const PicStepReport& SceneRunner<Dim>::step() {
   sum_particles_ += static_cast<double>(last_.n_particles);
   // The regular grid's count for the same liquid at the same finest h (see RunSummary).
   const CellGraph<Dim>& g = sim_->graph();
-  const int finest = scene_.pic.fine_level;
+  const int finest = scene_.pic.finest_level;
   double regular = 0.0;
   long fine_cells = 0, fine_particles = 0;
   for (CellId c : sim_->classification().fluid) {
@@ -300,7 +309,7 @@ const PicStepReport& SceneRunner<Dim>::step() {
   if (settings_.frames && !settings_.out.empty() &&
       (done() || detail::frame_due(scene_.output, sim_->time(), next_frame_)))
     write_frame();
-  if (settings_.checkpoint_every > 0 && sim_->step() % settings_.checkpoint_every == 0) checkpoint();
+  if (settings_.checkpoint_every > 0 && sim_->steps() % settings_.checkpoint_every == 0) checkpoint();
   wall_ += seconds_since(t0);
   return last_;
 }

@@ -38,6 +38,7 @@ struct SceneOverrides {
   std::string solver;     ///< "" keeps the scene's; else a PPE solver's name (linalg::solver_names())
   double amg_reuse = -1;  ///< -1 keeps the scene's; else AmgOptions::reuse_factor (>= 0)
   double spacing = -1;    ///< SPH: -1 keeps the scene's; else the level-0 particle spacing
+  bool paper = false;     ///< PIC: the paper's transfer and reseeding (PicOptions::apply_paper_preset)
 };
 
 /// 2 or 3: the dimension of the run saved in a checkpoint file.

@@ -402,8 +402,8 @@ void read_sph(const TableReader& r, Scene<Dim>& s) {
     for (int d = 0; d < Dim; ++d)
       LIQUID_VERIFY(sc.gate_box.lo[d] < sc.gate_box.hi[d], "{}: hi must exceed lo on every axis (axis {})",
                     r.where("gate_hi"), d);
-    LIQUID_VERIFY(inside<Dim>(sc.gate_box, s.pic.domain), "{}: the gate {} reaches outside the domain {}",
-                  r.where("gate_lo"), format_box<Dim>(sc.gate_box), format_box<Dim>(s.pic.domain));
+    LIQUID_VERIFY(inside<Dim>(sc.gate_box, s.domain), "{}: the gate {} reaches outside the domain {}",
+                  r.where("gate_lo"), format_box<Dim>(sc.gate_box), format_box<Dim>(s.domain));
     LIQUID_VERIFY(sc.settle > 0.0, "{}: a gate holds the liquid while it settles: give sph.settle > 0",
                   r.where("gate_lo"));
   }
@@ -419,7 +419,7 @@ void read_sph(const TableReader& r, Scene<Dim>& s) {
     for (const char* key : {"turn_duration", "turn_pivot", "turn_axis"})
       LIQUID_VERIFY(!r.has(key), "{}: the container does not turn without sph.turn_angle", r.where(key));
   o.rotation.duration = r.positive("turn_duration", 1.0);
-  o.rotation.pivot = r.vec<Dim>("turn_pivot", s.pic.domain.centre());
+  o.rotation.pivot = r.vec<Dim>("turn_pivot", s.domain.centre());
   if (r.has("view_eye") || r.has("view_target") || r.has("view_angle")) {
     for (const char* key : {"view_eye", "view_target", "view_angle"})
       LIQUID_VERIFY(r.has(key), "{}: the view needs view_eye, view_target and view_angle; '{}' is missing",
@@ -458,11 +458,11 @@ double sph_sound_speed(const Scene<Dim>& scene) {
   // top of the liquid or of a source to the bottom of the domain (in a turning container, across its
   // diagonal).
   double start = scene.max_initial_speed;
-  for (const PicSource<Dim>& src : scene.pic.sources) start = std::max(start, src.velocity.norm());
-  const Vec<Dim>& g = scene.pic.gravity;
+  for (const SceneSource<Dim>& src : scene.sources) start = std::max(start, src.velocity.norm());
+  const Vec<Dim>& g = scene.gravity;
   double fall = 0.0;
   if (scene.sph_scene.options.rotation.active()) {
-    fall = scene.pic.domain.size().norm();
+    fall = scene.domain.size().norm();
   } else if (g.norm() > 0.0) {
     const Vec<Dim> up = -g / g.norm();
     const auto lowest = [&](const Box<Dim>& b) {
@@ -472,8 +472,8 @@ double sph_sound_speed(const Scene<Dim>& scene) {
       return up.dot(b.centre()) + 0.5 * up.cwiseAbs().dot(b.size());
     };
     double top = highest(scene.liquid_bounds);
-    for (const Box<Dim>& b : scene.source_bounds) top = std::max(top, highest(b));
-    fall = std::max(0.0, top - lowest(scene.pic.domain));
+    for (const SceneSource<Dim>& src : scene.sources) top = std::max(top, highest(src.bounds));
+    fall = std::max(0.0, top - lowest(scene.domain));
   }
   const double fastest = std::sqrt(start * start + 2.0 * g.norm() * fall);
   LIQUID_VERIFY(fastest > 0.0,
@@ -486,22 +486,22 @@ double sph_sound_speed(const Scene<Dim>& scene) {
 template <int Dim>
 sph::SphOptions<Dim> sph_options(const Scene<Dim>& scene) {
   sph::SphOptions<Dim> o = scene.sph_scene.options;
-  const PicOptions<Dim>& pic = scene.pic;
-  o.container = pic.domain;
+  o.container = scene.domain;
   o.obstacles.clear();
-  if (pic.solid) o.obstacles.push_back(pic.solid);
-  o.gravity = pic.gravity;
-  o.adaptive = pic.adaptive;
+  if (scene.solid) o.obstacles.push_back(scene.solid);
+  o.gravity = scene.gravity;
+  o.adaptive = scene.adaptive;
+  const double shortest = scene.domain.size().minCoeff();
   if (!scene.sph_scene.spacing_given) {
     LIQUID_VERIFY(scene.grid_given,
                   "{}: the SPH particles need a spacing: give sph.spacing (or a [grid] whose finest cell, "
                   "halved, sets it)",
                   scene.path);
-    o.spacing = 0.5 * std::ldexp(pic.domain.size().minCoeff(), -pic.fine_level);
+    o.spacing = 0.5 * std::ldexp(shortest, -scene.pic.finest_level);  // [grid] finest, as a PIC run's
   }
-  LIQUID_VERIFY(o.spacing < pic.domain.size().minCoeff(),
+  LIQUID_VERIFY(o.spacing < shortest,
                 "{}: sph.spacing {} is not below the domain's shortest side {}: no particle fits", scene.path,
-                o.spacing, pic.domain.size().minCoeff());
+                o.spacing, shortest);
   const double particles = scene.liquid_bounds.volume() / std::pow(o.spacing, Dim);
   constexpr double budget = 5e7;
   LIQUID_VERIFY(particles <= budget,
@@ -511,10 +511,8 @@ sph::SphOptions<Dim> sph_options(const Scene<Dim>& scene) {
   const double c = sph_sound_speed(scene);
   o.fluid.stiffness = o.fluid.rest_density * c * c;
   o.sources.clear();
-  for (std::size_t k = 0; k < pic.sources.size(); ++k) {
-    const PicSource<Dim>& p = pic.sources[k];
-    o.sources.push_back({p.region, scene.source_bounds[k], p.velocity, p.start, p.stop});
-  }
+  for (const SceneSource<Dim>& src : scene.sources)
+    o.sources.push_back({src.region, src.bounds, src.velocity, src.start, src.stop});
   try {
     o.check();
   } catch (const Error& e) {
@@ -522,8 +520,6 @@ sph::SphOptions<Dim> sph_options(const Scene<Dim>& scene) {
   }
   return o;
 }
-
-namespace {}  // namespace
 
 int scene_dimension(const std::string& path) {
   const toml::table doc = parse(path);
@@ -538,161 +534,209 @@ int scene_dimension(const std::string& path) {
   return static_cast<int>(lo->size());
 }
 
+namespace {
+
 template <int Dim>
-Scene<Dim> load_scene(const std::string& path) {
-  const toml::table doc = parse(path);
-  const TableReader top(doc, path, "",
-                        {"name", "description", "figure", "domain", "grid", "solver", "sph", "time", "ppe", "output",
-                         "fluid", "solid", "source"});
-  Scene<Dim> s;
-  s.path = path;
-  s.name = top.string("name", std::filesystem::path(path).stem().string());
-  s.description = top.string("description", std::string());
-  s.figure = top.string("figure", std::string());
-  PicOptions<Dim>& o = s.pic;
-
-  const toml::table* domain = top.table("domain");
-  LIQUID_VERIFY(domain != nullptr, "{}: missing table [domain] (lo and hi)", path);
-  {
-    const TableReader r(*domain, path, "domain", {"lo", "hi"});
-    LIQUID_VERIFY(r.has("lo"), "{}: missing key 'domain.lo'", r.where_table());
-    const int found = static_cast<int>((*domain)["lo"].as_array() ? (*domain)["lo"].as_array()->size() : 0);
-    LIQUID_VERIFY(found == Dim, "{}: a {}D scene was expected, domain.lo has {} entries", r.where("lo"), Dim,
-                  found);
-    o.domain = {r.vec<Dim>("lo"), r.vec<Dim>("hi")};
-    for (int d = 0; d < Dim; ++d)
-      LIQUID_VERIFY(o.domain.lo[d] < o.domain.hi[d], "{}: hi must exceed lo on every axis (axis {})",
-                    r.where("hi"), d);
-  }
-
+const toml::table& table_or_empty(const TableReader& top, const char* name) {
   static const toml::table empty;
-  {
-    const toml::table* t = top.table("solver");
-    const TableReader r(
-        t ? *t : empty, path, "solver",
-        {"method", "adaptive", "flip", "integrator", "reseed", "reseed_mode", "gravity", "extrapolation",
-         "advect_cfl", "surface", "surface_radius", "projection", "min_face_mass", "share_factors",
-         "condition_estimate", "nullspace", "transfer_exponent", "transfer_degree"});
-    const std::string method = r.choice("method", {"rbf", "pic", "flip", "apic", "sph"}, std::string("rbf"));
-    s.sph = method == "sph";
-    o.transfer = parse_pic_transfer(s.sph ? "rbf" : method);
-    o.adaptive = r.boolean("adaptive", o.transfer == PicTransfer::rbf);
-    LIQUID_VERIFY(
-        s.sph || !o.adaptive || o.transfer == PicTransfer::rbf,
-        "{}: method '{}' runs on a uniform grid: set solver.adaptive = false (adaptive trees use rbf)",
-        r.where("adaptive"), to_string(o.transfer));
-    o.flip = r.number("flip", 0.95);
-    LIQUID_VERIFY(o.flip >= 0.0 && o.flip <= 1.0, "{}: {} is outside [0, 1]", r.where("flip"), o.flip);
-    o.integrator = r.choice("integrator", {"rk2", "rk3"}, std::string("rk2")) == "rk2" ? Integrator::rk2
-                                                                                       : Integrator::rk3;
-    o.reseed = r.boolean("reseed", true);
-    const std::string reseed_mode =
-        r.choice("reseed_mode", {"replace", "keep", "holes"}, std::string("replace"));
+  const toml::table* t = top.table(name);
+  return t ? *t : empty;
+}
+
+template <int Dim>
+void read_domain(const TableReader& top, Scene<Dim>& s) {
+  const toml::table* domain = top.table("domain");
+  LIQUID_VERIFY(domain != nullptr, "{}: missing table [domain] (lo and hi)", s.path);
+  const TableReader r(*domain, s.path, "domain", {"lo", "hi"});
+  LIQUID_VERIFY(r.has("lo"), "{}: missing key 'domain.lo'", r.where_table());
+  const int found = static_cast<int>((*domain)["lo"].as_array() ? (*domain)["lo"].as_array()->size() : 0);
+  LIQUID_VERIFY(found == Dim, "{}: a {}D scene was expected, domain.lo has {} entries", r.where("lo"), Dim,
+                found);
+  s.domain = {r.vec<Dim>("lo"), r.vec<Dim>("hi")};
+  for (int d = 0; d < Dim; ++d)
+    LIQUID_VERIFY(s.domain.lo[d] < s.domain.hi[d], "{}: hi must exceed lo on every axis (axis {})",
+                  r.where("hi"), d);
+}
+
+const std::vector<std::string> solver_keys = {"method",
+                                              "adaptive",
+                                              "flip",
+                                              "integrator",
+                                              "reseed",
+                                              "reseed_mode",
+                                              "gravity",
+                                              "extrapolation",
+                                              "advect_cfl",
+                                              "surface",
+                                              "surface_radius",
+                                              "projection",
+                                              "min_face_mass",
+                                              "share_factors",
+                                              "condition_estimate",
+                                              "nullspace",
+                                              "transfer_exponent",
+                                              "transfer_degree",
+                                              "preset"};
+
+/// The [solver] keys every method reads: the method, the adaptivity and gravity.
+template <int Dim>
+void read_method(const TableReader& r, Scene<Dim>& s) {
+  const std::string method = r.choice("method", {"rbf", "pic", "flip", "apic", "sph"}, std::string("rbf"));
+  s.sph = method == "sph";
+  s.pic.transfer = parse_pic_transfer(s.sph ? "rbf" : method);
+  s.adaptive = r.boolean("adaptive", s.pic.transfer == PicTransfer::rbf);
+  LIQUID_VERIFY(
+      s.sph || !s.adaptive || s.pic.transfer == PicTransfer::rbf,
+      "{}: method '{}' runs on a uniform grid: set solver.adaptive = false (adaptive trees use rbf)",
+      r.where("adaptive"), to_string(s.pic.transfer));
+  s.gravity = r.vec<Dim>("gravity", PicOptions<Dim>::default_gravity());
+}
+
+/// The PIC solver's [solver] keys: transfers, reseeding, surface, projection, the closed box's PPE.
+template <int Dim>
+void read_pic_solver(const TableReader& r, Scene<Dim>& s) {
+  PicOptions<Dim>& o = s.pic;
+  o.flip = r.number("flip", 0.95);
+  LIQUID_VERIFY(o.flip >= 0.0 && o.flip <= 1.0, "{}: {} is outside [0, 1]", r.where("flip"), o.flip);
+  o.integrator =
+      r.choice("integrator", {"rk2", "rk3"}, std::string("rk2")) == "rk2" ? Integrator::rk2 : Integrator::rk3;
+  o.reseed = r.boolean("reseed", true);
+  // The paper's preset first: the keys below override what it sets.
+  s.paper_preset = r.choice("preset", {"default", "paper"}, std::string("default")) == "paper";
+  if (s.paper_preset) o.apply_paper_preset();
+  if (r.has("reseed_mode")) {
+    const std::string reseed_mode = r.choice("reseed_mode", {"replace", "keep", "holes"});
     o.reseeding.keep = reseed_mode == "keep";
     if (reseed_mode == "holes") {  // only cells the step left empty inside the liquid
       o.reseeding.lo = 1;
       o.reseeding.hi = std::numeric_limits<int>::max();
-    }
-    o.rbf.exponent = static_cast<int>(r.integer_in("transfer_exponent", 1, 9, o.rbf.exponent));
-    LIQUID_VERIFY(o.rbf.exponent % 2 == 1, "{}: the PHS exponent must be odd (1, 3, 5, 7 or 9), got {}",
-                  r.where("transfer_exponent"), o.rbf.exponent);
-    o.rbf.degree = static_cast<int>(r.integer_in("transfer_degree", 0, 4, o.rbf.degree));
-    o.rbf.share_factors = r.boolean("share_factors", true);
-    o.rbf.condition_estimate =
-        r.choice("condition_estimate", {"probes", "hager-higham"}, std::string("probes")) == "probes"
-            ? rbf::ConditionEstimate::probes
-            : rbf::ConditionEstimate::hager_higham;
-    o.poisson.nullspace = r.choice("nullspace", {"zero-mean", "pin"}, std::string("zero-mean")) == "pin"
-                              ? mac::Nullspace::pin
-                              : mac::Nullspace::zero_mean;
-    o.gravity = r.vec<Dim>("gravity", PicOptions<Dim>::default_gravity());
-    o.extrapolation_layers = static_cast<int>(r.integer_in("extrapolation", 1, 64, 4));
-    o.advect_cfl = r.positive("advect_cfl", 1.0);
-    o.surface = parse_pic_surface(r.choice("surface", {"air", "levelset"}, std::string("air")));
-    o.surface_radius = r.positive("surface_radius", o.surface_radius);
-    LIQUID_VERIFY(o.surface_radius < 2.0, "{}: {} finest cells is too wide (below 2)",
-                  r.where("surface_radius"), o.surface_radius);
-    o.projection =
-        parse_pic_projection(r.choice("projection", {"volume", "mass", "split"}, std::string("volume")));
-    LIQUID_VERIFY(o.projection == PicProjection::volume || s.sph || o.transfer != PicTransfer::rbf,
-                  "{}: the {} projection needs method pic, flip or apic (a uniform grid)",
-                  r.where("projection"), to_string(o.projection));
-    o.min_face_mass = r.positive("min_face_mass", o.min_face_mass);
-    LIQUID_VERIFY(o.min_face_mass <= 1.0, "{}: {} is above 1 (a full cell's mass)", r.where("min_face_mass"),
-                  o.min_face_mass);
-  }
-  if (top.has("grid") || !s.sph) {
-    const toml::table* t = top.table("grid");
-    LIQUID_VERIFY(t != nullptr || s.sph, "{}: missing table [grid] (at least 'finest')", path);
-    s.grid_given = t != nullptr;
-    const TableReader r(*t, path, "grid", {"finest", "coarse", "max_jump", "band"});
-    o.fine_level = static_cast<int>(r.integer_in("finest", 1, morton::max_level<Dim>));
-    o.coarse_level = static_cast<int>(r.integer_in("coarse", 0, o.fine_level, std::max(0, o.fine_level - 3)));
-    if (r.has("max_jump") && (*t)["max_jump"].is_string()) {
-      r.choice("max_jump", {"unlimited"});
-      o.max_jump = unlimited_jump;
-    } else {
-      o.max_jump = static_cast<int>(r.integer_in("max_jump", 1, 4, 2));
-    }
-    o.band = static_cast<int>(r.integer_in("band", 0, 16, 2));
-  }
-  if (const toml::table* t = top.table("sph")) read_sph<Dim>(TableReader(*t, path, "sph", sph_keys), s);
-  {
-    const toml::table* t = top.table("time");
-    LIQUID_VERIFY(t != nullptr, "{}: missing table [time] (end or steps)", path);
-    const TableReader r(*t, path, "time", {"end", "steps", "cfl", "dt_min", "dt_max"});
-    LIQUID_VERIFY(r.has("end") || r.has("steps"), "{}: give 'time.end' (seconds) or 'time.steps'",
-                  r.where_table());
-    if (r.has("end")) s.time.end = r.positive("end");
-    if (r.has("steps")) s.time.steps = r.integer_in("steps", 1, 100000000);
-    // SPH's step is bounded by the speed of sound (AdaptiveSph::stable_dt): a lower bound on dt would
-    // override it, so its default is far below any stable step.
-    s.time.cfl = r.positive("cfl", s.sph ? 0.25 : 1.0);
-    s.time.dt_max = r.positive("dt_max", s.sph ? 1e-3 : 0.01);
-    s.time.dt_min = r.positive("dt_min", std::min(s.sph ? 1e-9 : 1e-5, s.time.dt_max));
-    LIQUID_VERIFY(s.time.dt_min <= s.time.dt_max, "{}: dt_min {} exceeds dt_max {}", r.where("dt_min"),
-                  s.time.dt_min, s.time.dt_max);
-  }
-  {
-    const toml::table* t = top.table("ppe");
-    const TableReader r(t ? *t : empty, path, "ppe",
-                        {"solver", "tolerance", "max_iterations", "continue_on_failure", "amg_reuse"});
-    const std::vector<std::string> names = linalg::solver_names();
-    s.ppe_solver_given = r.has("solver");
-    o.solver.kind = s.ppe_solver_given ? linalg::parse_solver(r.choice("solver", names))
-                                       : default_ppe_solver(o.adaptive, Dim);
-    o.solver.tolerance = r.positive("tolerance", o.solver.tolerance);
-    LIQUID_VERIFY(o.solver.tolerance < 1.0, "{}: a relative tolerance must be below 1 (found {})",
-                  r.where("tolerance"), o.solver.tolerance);
-    o.solver.max_iterations =
-        static_cast<int>(r.integer_in("max_iterations", 1, 10000000, o.solver.max_iterations));
-    o.continue_on_ppe_failure = r.boolean("continue_on_failure", false);
-    o.solver.amg.reuse_factor = r.number("amg_reuse", o.solver.amg.reuse_factor);
-    LIQUID_VERIFY(o.solver.amg.reuse_factor >= 0.0,
-                  "{}: must be 0 (a new AMG hierarchy every step) or positive (found {})",
-                  r.where("amg_reuse"), o.solver.amg.reuse_factor);
-  }
-  {
-    const toml::table* t = top.table("output");
-    const TableReader r(t ? *t : empty, path, "output", {"every", "cells", "particles", "surface", "fields"});
-    s.output.every = r.has("every") ? r.positive("every") : 0.0;
-    s.output.cells = r.boolean("cells", true);
-    s.output.particles = r.boolean("particles", true);
-    s.output.surface = r.boolean("surface", true);
-    s.output.fields_given = r.has("fields");
-    std::vector<std::string> all = SceneOutput::pic_fields();
-    for (const std::string& f : SceneOutput::sph_fields())
-      if (std::find(all.begin(), all.end(), f) == all.end()) all.push_back(f);
-    s.output.fields = r.strings("fields", all, s.sph ? SceneOutput::sph_fields() : SceneOutput::pic_fields());
-    if (s.output.fields_given) {
-      const std::string wrong = field_not_written(s.output.fields, s.sph);
-      LIQUID_VERIFY(wrong.empty(), "{}: '{}' is not a field of {} (its fields: {})", r.where("fields"), wrong,
-                    s.sph ? "the SPH particles" : "the PIC cells and particles",
-                    fmt::join(s.sph ? SceneOutput::sph_fields() : SceneOutput::pic_fields(), ", "));
+    } else {  // the paper's band: cells with too few or too many particles
+      o.reseeding.lo = Dim == 2 ? 3 : 5;
+      o.reseeding.hi = Dim == 2 ? 12 : 15;
     }
   }
+  o.rbf.exponent = static_cast<int>(r.integer_in("transfer_exponent", 1, 9, o.rbf.exponent));
+  LIQUID_VERIFY(o.rbf.exponent % 2 == 1, "{}: the PHS exponent must be odd (1, 3, 5, 7 or 9), got {}",
+                r.where("transfer_exponent"), o.rbf.exponent);
+  o.rbf.degree = static_cast<int>(r.integer_in("transfer_degree", 0, 4, o.rbf.degree));
+  o.rbf.share_factors = r.boolean("share_factors", true);
+  o.rbf.condition_estimate =
+      r.choice("condition_estimate", {"probes", "hager-higham"}, std::string("probes")) == "probes"
+          ? rbf::ConditionEstimate::probes
+          : rbf::ConditionEstimate::hager_higham;
+  o.poisson.nullspace = r.choice("nullspace", {"zero-mean", "pin"}, std::string("zero-mean")) == "pin"
+                            ? mac::Nullspace::pin
+                            : mac::Nullspace::zero_mean;
+  o.extrapolation_layers = static_cast<int>(r.integer_in("extrapolation", 1, 64, 4));
+  o.advect_cfl = r.positive("advect_cfl", 1.0);
+  o.surface = parse_pic_surface(r.choice("surface", {"air", "levelset"}, std::string("air")));
+  o.surface_radius = r.positive("surface_radius", o.surface_radius);
+  LIQUID_VERIFY(o.surface_radius < 2.0, "{}: {} finest cells is too wide (below 2)",
+                r.where("surface_radius"), o.surface_radius);
+  o.projection =
+      parse_pic_projection(r.choice("projection", {"volume", "mass", "split"}, std::string("volume")));
+  LIQUID_VERIFY(o.projection == PicProjection::volume || s.sph || o.transfer != PicTransfer::rbf,
+                "{}: the {} projection needs method pic, flip or apic (a uniform grid)",
+                r.where("projection"), to_string(o.projection));
+  o.min_face_mass = r.positive("min_face_mass", o.min_face_mass);
+  LIQUID_VERIFY(o.min_face_mass <= 1.0, "{}: {} is above 1 (a full cell's mass)", r.where("min_face_mass"),
+                o.min_face_mass);
+}
 
-  // Liquid, solids, sources.
+/// [grid]: the PIC tree's levels (an SPH scene may give one: its finest cell sets the spacing).
+template <int Dim>
+void read_grid(const TableReader& top, Scene<Dim>& s) {
+  if (!top.has("grid") && s.sph) return;
+  PicOptions<Dim>& o = s.pic;
+  const toml::table* t = top.table("grid");
+  LIQUID_VERIFY(t != nullptr, "{}: missing table [grid] (at least 'finest')", s.path);
+  s.grid_given = true;
+  const TableReader r(*t, s.path, "grid", {"finest", "coarse", "max_jump", "band"});
+  o.finest_level = static_cast<int>(r.integer_in("finest", 1, morton::max_level<Dim>));
+  o.coarse_level =
+      static_cast<int>(r.integer_in("coarse", 0, o.finest_level, std::max(0, o.finest_level - 3)));
+  if (r.has("max_jump") && (*t)["max_jump"].is_string()) {
+    r.choice("max_jump", {"unlimited"});
+    o.max_jump = unlimited_jump;
+  } else {
+    o.max_jump = static_cast<int>(r.integer_in("max_jump", 1, 4, 2));
+  }
+  o.band = static_cast<int>(r.integer_in("band", 0, 16, 2));
+}
+
+/// [time]: the end, the step's bounds.
+template <int Dim>
+void read_time(const TableReader& top, Scene<Dim>& s) {
+  const std::string& path = s.path;
+  const toml::table* t = top.table("time");
+  LIQUID_VERIFY(t != nullptr, "{}: missing table [time] (end or steps)", path);
+  const TableReader r(*t, path, "time", {"end", "steps", "cfl", "dt_min", "dt_max"});
+  LIQUID_VERIFY(r.has("end") || r.has("steps"), "{}: give 'time.end' (seconds) or 'time.steps'",
+                r.where_table());
+  if (r.has("end")) s.time.end = r.positive("end");
+  if (r.has("steps")) s.time.steps = r.integer_in("steps", 1, 100000000);
+  // SPH's step is bounded by the speed of sound (AdaptiveSph::stable_dt): a lower bound on dt would
+  // override it, so its default is far below any stable step.
+  s.time.cfl = r.positive("cfl", s.sph ? 0.25 : 1.0);
+  s.time.dt_max = r.positive("dt_max", s.sph ? 1e-3 : 0.01);
+  s.time.dt_min = r.positive("dt_min", std::min(s.sph ? 1e-9 : 1e-5, s.time.dt_max));
+  LIQUID_VERIFY(s.time.dt_min <= s.time.dt_max, "{}: dt_min {} exceeds dt_max {}", r.where("dt_min"),
+                s.time.dt_min, s.time.dt_max);
+}
+
+/// [ppe]: the PIC solver's pressure solve.
+template <int Dim>
+void read_ppe(const TableReader& top, Scene<Dim>& s) {
+  const std::string& path = s.path;
+  static const toml::table empty;
+  PicOptions<Dim>& o = s.pic;
+  const toml::table* t = top.table("ppe");
+  const TableReader r(t ? *t : empty, path, "ppe",
+                      {"solver", "tolerance", "max_iterations", "continue_on_failure", "amg_reuse"});
+  const std::vector<std::string> names = linalg::solver_names();
+  s.ppe_solver_given = r.has("solver");
+  o.solver.kind = s.ppe_solver_given ? linalg::parse_solver(r.choice("solver", names))
+                                     : default_ppe_solver(s.adaptive, Dim);
+  o.solver.tolerance = r.positive("tolerance", o.solver.tolerance);
+  LIQUID_VERIFY(o.solver.tolerance < 1.0, "{}: a relative tolerance must be below 1 (found {})",
+                r.where("tolerance"), o.solver.tolerance);
+  o.solver.max_iterations =
+      static_cast<int>(r.integer_in("max_iterations", 1, 10000000, o.solver.max_iterations));
+  o.continue_on_ppe_failure = r.boolean("continue_on_failure", false);
+  o.solver.amg.reuse_factor = r.number("amg_reuse", o.solver.amg.reuse_factor);
+  LIQUID_VERIFY(o.solver.amg.reuse_factor >= 0.0,
+                "{}: must be 0 (a new AMG hierarchy every step) or positive (found {})", r.where("amg_reuse"),
+                o.solver.amg.reuse_factor);
+}
+
+/// [output]: what the frames hold.
+template <int Dim>
+void read_output(const TableReader& top, Scene<Dim>& s) {
+  const std::string& path = s.path;
+  static const toml::table empty;
+  const toml::table* t = top.table("output");
+  const TableReader r(t ? *t : empty, path, "output", {"every", "cells", "particles", "surface", "fields"});
+  s.output.every = r.has("every") ? r.positive("every") : 0.0;
+  s.output.cells = r.boolean("cells", true);
+  s.output.particles = r.boolean("particles", true);
+  s.output.surface = r.boolean("surface", true);
+  s.output.fields_given = r.has("fields");
+  std::vector<std::string> all = SceneOutput::pic_fields();
+  for (const std::string& f : SceneOutput::sph_fields())
+    if (std::find(all.begin(), all.end(), f) == all.end()) all.push_back(f);
+  s.output.fields = r.strings("fields", all, s.sph ? SceneOutput::sph_fields() : SceneOutput::pic_fields());
+  if (s.output.fields_given) {
+    const std::string wrong = field_not_written(s.output.fields, s.sph);
+    LIQUID_VERIFY(wrong.empty(), "{}: '{}' is not a field of {} (its fields: {})", r.where("fields"), wrong,
+                  s.sph ? "the SPH particles" : "the PIC cells and particles",
+                  fmt::join(s.sph ? SceneOutput::sph_fields() : SceneOutput::pic_fields(), ", "));
+  }
+}
+
+/// [[fluid]], [[solid]] and [[source]]: the liquid, the obstacles and the inflows.
+template <int Dim>
+void read_shapes(const TableReader& top, Scene<Dim>& s) {
+  const std::string& path = s.path;
   const auto fluids = top.tables("fluid");
   LIQUID_VERIFY(!fluids.empty(), "{}: no [[fluid]] shape: the scene holds no liquid", path);
   std::vector<std::pair<levelset::Function<Dim>, Vec<Dim>>> moving;
@@ -704,8 +748,8 @@ Scene<Dim> load_scene(const std::string& path) {
     LIQUID_VERIFY(s.liquid || shape.op == "add", "{}: the first [[fluid]] shape must add liquid",
                   r.where("op"));
     if (shape.op == "add")
-      LIQUID_VERIFY(inside<Dim>(shape.bounds, o.domain), "{}: the fluid {} reaches outside the domain {}",
-                    r.where("shape"), format_box<Dim>(shape.bounds), format_box<Dim>(o.domain));
+      LIQUID_VERIFY(inside<Dim>(shape.bounds, s.domain), "{}: the fluid {} reaches outside the domain {}",
+                    r.where("shape"), format_box<Dim>(shape.bounds), format_box<Dim>(s.domain));
     if (shape.op == "add") {
       if (!s.liquid) s.liquid_bounds = shape.bounds;
       s.liquid_bounds.lo = s.liquid_bounds.lo.cwiseMin(shape.bounds.lo);
@@ -727,9 +771,9 @@ Scene<Dim> load_scene(const std::string& path) {
   for (const toml::table* t : top.tables("solid")) {
     const TableReader r(*t, path, "solid", shape_keys);
     const Shape<Dim> shape = read_shape<Dim>(r, true);
-    LIQUID_VERIFY(o.solid || shape.op == "add", "{}: the first [[solid]] shape must add solid",
+    LIQUID_VERIFY(s.solid || shape.op == "add", "{}: the first [[solid]] shape must add solid",
                   r.where("op"));
-    o.solid = combine<Dim>(o.solid, shape);
+    s.solid = combine<Dim>(s.solid, shape);
   }
   for (const toml::table* t : top.tables("source")) {
     std::vector<std::string> keys = shape_keys;
@@ -737,18 +781,61 @@ Scene<Dim> load_scene(const std::string& path) {
     keys.insert(keys.end(), {"velocity", "start", "stop"});
     const TableReader r(*t, path, "source", keys);
     const Shape<Dim> shape = read_shape<Dim>(r, false);
-    LIQUID_VERIFY(inside<Dim>(shape.bounds, o.domain), "{}: the source {} reaches outside the domain {}",
-                  r.where("shape"), format_box<Dim>(shape.bounds), format_box<Dim>(o.domain));
-    PicSource<Dim> src;
+    LIQUID_VERIFY(inside<Dim>(shape.bounds, s.domain), "{}: the source {} reaches outside the domain {}",
+                  r.where("shape"), format_box<Dim>(shape.bounds), format_box<Dim>(s.domain));
+    SceneSource<Dim> src;
     src.region = shape.phi;
+    src.bounds = shape.bounds;
     src.velocity = r.vec<Dim>("velocity");
     src.start = r.number("start", 0.0);
     src.stop = r.number("stop", std::numeric_limits<double>::infinity());
     LIQUID_VERIFY(src.start >= 0.0 && src.stop > src.start, "{}: need 0 <= start < stop (found {} and {})",
                   r.where("stop"), src.start, src.stop);
-    o.sources.push_back(src);
-    s.source_bounds.push_back(shape.bounds);
+    s.sources.push_back(src);
   }
+}
+
+/// The PIC solver's options: its own tables' values (s.pic) with the scene's domain, gravity,
+/// adaptivity, solids and sources.
+template <int Dim>
+void assemble_pic(Scene<Dim>& s) {
+  PicOptions<Dim>& o = s.pic;
+  o.domain = s.domain;
+  o.gravity = s.gravity;
+  o.adaptive = s.adaptive;
+  o.solid = s.solid;
+  o.sources.clear();
+  for (const SceneSource<Dim>& src : s.sources)
+    o.sources.push_back({src.region, src.velocity, src.start, src.stop});
+  if (!s.ppe_solver_given) o.solver.kind = default_ppe_solver(o.adaptive, Dim);
+}
+
+}  // namespace
+
+template <int Dim>
+Scene<Dim> load_scene(const std::string& path) {
+  const toml::table doc = parse(path);
+  const TableReader top(doc, path, "",
+                        {"name", "description", "figure", "domain", "grid", "solver", "sph", "time", "ppe",
+                         "output", "fluid", "solid", "source"});
+  Scene<Dim> s;
+  s.path = path;
+  s.name = top.string("name", std::filesystem::path(path).stem().string());
+  s.description = top.string("description", std::string());
+  s.figure = top.string("figure", std::string());
+  read_domain<Dim>(top, s);
+  {
+    const TableReader solver(table_or_empty<Dim>(top, "solver"), path, "solver", solver_keys);
+    read_method<Dim>(solver, s);
+    read_pic_solver<Dim>(solver, s);
+  }
+  read_grid<Dim>(top, s);
+  if (const toml::table* t = top.table("sph")) read_sph<Dim>(TableReader(*t, path, "sph", sph_keys), s);
+  read_time<Dim>(top, s);
+  read_ppe<Dim>(top, s);
+  read_output<Dim>(top, s);
+  read_shapes<Dim>(top, s);
+  assemble_pic<Dim>(s);
   if (s.sph) sph_options<Dim>(s);  // refuses what the SPH solver cannot run, naming the key
   return s;
 }

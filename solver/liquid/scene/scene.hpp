@@ -67,13 +67,31 @@ struct SphScene {
   sph::SurfaceModel surface = sph::SurfaceModel::distance;  ///< the surface meshed in the frames
 };
 
+/// An inflow of the scene ([[source]]): where, how fast, and when.
+template <int Dim>
+struct SceneSource {
+  levelset::Function<Dim> region;  ///< < 0 inside
+  Box<Dim> bounds;                 ///< the region's bounding box
+  Vec<Dim> velocity = Vec<Dim>::Zero();
+  double start = 0.0, stop = std::numeric_limits<double>::infinity();  ///< seconds
+};
+
+/// A scene as read: what every method shares (the tank, gravity, the liquid, solids and sources, the
+/// time and the output), then each solver's own tables: `pic` ([grid], [solver], [ppe]; its domain,
+/// gravity, solids and sources copied from the shared ones) and `sph_scene` ([sph]; sph_options()
+/// assembles the SPH solver's options from it and the shared ones).
 template <int Dim>
 struct Scene {
   std::string name;         ///< the file's `name`, or its stem
   std::string description;  ///< one line
   std::string figure;       ///< the paper's figure the scene reproduces ("" if none)
   std::string path;         ///< the file read
-  PicOptions<Dim> pic;      ///< domain, levels, method, solids, sources, PPE
+  Box<Dim> domain{Vec<Dim>::Zero(), Vec<Dim>::Ones()};  ///< the tank: the PIC domain, the SPH container
+  Vec<Dim> gravity = PicOptions<Dim>::default_gravity();
+  bool adaptive = true;           ///< solver.adaptive: the tree (PIC) or the particle levels (SPH)
+  levelset::Function<Dim> solid;  ///< the [[solid]] shapes combined (< 0 inside; empty: none)
+  std::vector<SceneSource<Dim>> sources;
+  PicOptions<Dim> pic;  ///< the PIC solver's options
   levelset::Function<Dim> liquid;
   /// Initial velocity by position: that of the last [[fluid]] shape holding the point (0 if none).
   std::function<Vec<Dim>(const Vec<Dim>&)> velocity;
@@ -82,10 +100,10 @@ struct Scene {
   bool ppe_solver_given = false;  ///< ppe.solver is in the file (else default_ppe_solver())
   bool grid_given = false;        ///< the file has a [grid] table (PIC methods need it)
   bool sph = false;               ///< solver.method = "sph": the adaptive SPH solver runs it
+  bool paper_preset = false;      ///< solver.preset = "paper" (PicOptions::apply_paper_preset)
   SphScene<Dim> sph_scene;
-  Box<Dim> liquid_bounds;               ///< the bounding box of the [[fluid]] shapes that add liquid
-  std::vector<Box<Dim>> source_bounds;  ///< each [[source]]'s bounding box
-  double max_initial_speed = 0.0;       ///< the fastest [[fluid]] velocity given
+  Box<Dim> liquid_bounds;          ///< the bounding box of the [[fluid]] shapes that add liquid
+  double max_initial_speed = 0.0;  ///< the fastest [[fluid]] velocity given
   /// "sph" or the PIC transfer's name.
   std::string method() const { return sph ? "sph" : to_string(pic.transfer); }
 };

@@ -727,86 +727,95 @@ SphStepReport AdaptiveSph<Dim>::advance(double dt) {
   auto total = timer_.scope("total");
   const bool resampling = steps_ % options_.resample_every == 0;
   SphStepReport report;
-  if (!options_.sources.empty()) {
-    auto t = timer_.scope("sources");
-    report.emitted = apply_sources();
-  }
-  {
-    auto t = timer_.scope("neighbours");
-    // Lists that still hold serve a resampling step too (every sum skips the skin's pairs, so the
-    // results are the same to the bit); redistancing needs only the point tree at today's positions.
-    report.searched = !lists_hold();
-    if (report.searched) {
-      report.refreshed = refresh_movers();
-      report.searched = report.refreshed == 0;
-    }
-    if (report.searched)
-      find_neighbours_now(resampling);
-    else if (resampling)
-      tree_.build(p_.x);
-  }
-  report.pairs = nbrs_.n_pairs();
-  // FluidConstants::shifting: the gradient of the kernel's partition of unity, from the rate's pairs.
-  std::vector<Vec<Dim>> shift;
-  {
-    auto t = timer_.scope("forces");
-    const Vec<Dim> gravity = gravity_at(time_);
-    if (options_.fluid.density_update == DensityUpdate::summation) {
-      compute_density<Dim>(p_, nbrs_, options_.fluid, &walls_);
-    } else {
-      if (options_.fluid.free_particles_at_rest)
-        report.rested = rest_free_particles<Dim>(p_, nbrs_, options_.fluid, &walls_);
-      compute_pressure<Dim>(p_, options_.fluid);
-    }
-    compute_accelerations<Dim>(p_, nbrs_, options_.fluid, gravity, &walls_);
-    if (options_.rotation.active()) add_frame_accelerations(dt);
-    if (options_.fluid.density_update == DensityUpdate::continuity)
-      compute_density_rate<Dim>(p_, nbrs_, options_.fluid, gravity, &walls_,
-                                options_.fluid.kicked_density_rate ? dt : 0.0,
-                                options_.fluid.shifting > 0.0 ? &shift : nullptr);
-    for (int i = 0; i < p_.size(); ++i) {
-      if (!std::isfinite(p_.density[i]) || !std::isfinite(p_.drho[i]) || !p_.a[i].allFinite())
-        throw_not_finite(i);
-      const double excess = p_.density[i] / options_.fluid.rest_density - 1.0;
-      report.max_density_error = std::max(report.max_density_error, std::abs(excess));
-      report.max_compression = std::max(report.max_compression, excess);
-    }
-  }
-  if (resampling) redistance_and_resample(report);
+  const auto phase = [this](const char* name, auto&& body) {
+    const auto t = timer_.scope(name);
+    body();
+  };
+  if (!options_.sources.empty()) phase("sources", [&] { report.emitted = apply_sources(); });
+  phase("neighbours", [&] { update_neighbours(resampling, report); });
+  std::vector<Vec<Dim>> shift;  // FluidConstants::shifting: from the rate's pairs
+  phase("forces", [&] { forces(dt, report, shift); });
+  if (resampling) redistance_and_resample(report);  // timed as redistance, elfs and resample
   // Split or merged particles have no shift of their own: none this step.
   if (static_cast<int>(shift.size()) != p_.size() || report.resampling.split + report.resampling.merged > 0)
     shift.clear();
-  {
-    auto t = timer_.scope("integrate");
-    const int n = p_.size();
-#pragma omp parallel for schedule(static)
-    for (int i = 0; i < n; ++i) {
-      p_.v[i] += dt * p_.a[i];
-      p_.x[i] += dt * p_.v[i];
-      if (!shift.empty() && p_.distance[i] >= p_.radius[i])
-        p_.x[i] -= (options_.fluid.shifting * p_.radius[i] * p_.radius[i]) * shift[i];
-    }
-    if (options_.fluid.density_update == DensityUpdate::continuity)
-      for (int i = 0; i < n; ++i) {
-        const double before = p_.density[i];
-        p_.density[i] += dt * p_.drho[i];
-        // A density at or below zero makes the particle's volume infinite and every pair with it
-        // NaN: stop here, at the particle, rather than at the first neighbour the NaN reaches.
-        if (!(p_.density[i] > 0.0))
-          throw Error(fmt::format(
-              "sph: particle {} (level {}) at step {}, t = {} s: its density fell from {:.6g} to {:.6g} "
-              "(rate {:.6g} over dt = {:.3g} s); the step is too large for this flow (lower the scene's "
-              "[time] cfl); position ({}), velocity ({})",
-              i, int(p_.level[i]), steps_, time_, before, p_.density[i], p_.drho[i], dt,
-              fmt::join(p_.x[i], ", "), fmt::join(p_.v[i], ", ")));
-      }
-  }
-  {
-    auto t = timer_.scope("collisions");
-    collide();
-  }
+  phase("integrate", [&] { integrate(dt, shift); });
+  phase("collisions", [&] { collide(); });
   time_ += dt;
   ++steps_;
+  tally(dt, report);
+  return report;
+}
+
+template <int Dim>
+void AdaptiveSph<Dim>::update_neighbours(bool resampling, SphStepReport& report) {
+  // Lists that still hold serve a resampling step too (every sum skips the skin's pairs, so the
+  // results are the same to the bit); redistancing needs only the point tree at today's positions.
+  report.searched = !lists_hold();
+  if (report.searched) {
+    report.refreshed = refresh_movers();
+    report.searched = report.refreshed == 0;
+  }
+  if (report.searched)
+    find_neighbours_now(resampling);
+  else if (resampling)
+    tree_.build(p_.x);
+  report.pairs = nbrs_.n_pairs();
+}
+
+template <int Dim>
+void AdaptiveSph<Dim>::forces(double dt, SphStepReport& report, std::vector<Vec<Dim>>& shift) {
+  const Vec<Dim> gravity = gravity_at(time_);
+  if (options_.fluid.density_update == DensityUpdate::summation) {
+    compute_density<Dim>(p_, nbrs_, options_.fluid, &walls_);
+  } else {
+    if (options_.fluid.free_particles_at_rest)
+      report.rested = rest_free_particles<Dim>(p_, nbrs_, options_.fluid, &walls_);
+    compute_pressure<Dim>(p_, options_.fluid);
+  }
+  compute_accelerations<Dim>(p_, nbrs_, options_.fluid, gravity, &walls_);
+  if (options_.rotation.active()) add_frame_accelerations(dt);
+  if (options_.fluid.density_update == DensityUpdate::continuity)
+    compute_density_rate<Dim>(p_, nbrs_, options_.fluid, gravity, &walls_,
+                              options_.fluid.kicked_density_rate ? dt : 0.0,
+                              options_.fluid.shifting > 0.0 ? &shift : nullptr);
+  for (int i = 0; i < p_.size(); ++i) {
+    if (!std::isfinite(p_.density[i]) || !std::isfinite(p_.drho[i]) || !p_.a[i].allFinite())
+      throw_not_finite(i);
+    const double excess = p_.density[i] / options_.fluid.rest_density - 1.0;
+    report.max_density_error = std::max(report.max_density_error, std::abs(excess));
+    report.max_compression = std::max(report.max_compression, excess);
+  }
+}
+
+template <int Dim>
+void AdaptiveSph<Dim>::integrate(double dt, const std::vector<Vec<Dim>>& shift) {
+  const int n = p_.size();
+#pragma omp parallel for schedule(static)
+  for (int i = 0; i < n; ++i) {
+    p_.v[i] += dt * p_.a[i];
+    p_.x[i] += dt * p_.v[i];
+    if (!shift.empty() && p_.distance[i] >= p_.radius[i])
+      p_.x[i] -= (options_.fluid.shifting * p_.radius[i] * p_.radius[i]) * shift[i];
+  }
+  if (options_.fluid.density_update != DensityUpdate::continuity) return;
+  for (int i = 0; i < n; ++i) {
+    const double before = p_.density[i];
+    p_.density[i] += dt * p_.drho[i];
+    // A density at or below zero makes the particle's volume infinite and every pair with it
+    // NaN: stop here, at the particle, rather than at the first neighbour the NaN reaches.
+    if (!(p_.density[i] > 0.0))
+      throw Error(fmt::format(
+          "sph: particle {} (level {}) at step {}, t = {} s: its density fell from {:.6g} to {:.6g} "
+          "(rate {:.6g} over dt = {:.3g} s); the step is too large for this flow (lower the scene's "
+          "[time] cfl); position ({}), velocity ({})",
+          i, int(p_.level[i]), steps_, time_, before, p_.density[i], p_.drho[i], dt, fmt::join(p_.x[i], ", "),
+          fmt::join(p_.v[i], ", ")));
+  }
+}
+
+template <int Dim>
+void AdaptiveSph<Dim>::tally(double dt, SphStepReport& report) const {
   report.dt = dt;
   report.particles = p_.size();
   report.per_level.assign(options_.max_level + 1, 0);
@@ -814,7 +823,6 @@ SphStepReport AdaptiveSph<Dim>::advance(double dt) {
     ++report.per_level[std::min<int>(p_.level[i], options_.max_level)];
     report.max_speed = std::max(report.max_speed, p_.v[i].norm());
   }
-  return report;
 }
 
 template <int Dim>

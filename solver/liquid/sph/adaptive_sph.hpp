@@ -262,9 +262,19 @@ class AdaptiveSph {
   int apply_sources();
   /// Adds the turning frame's fictitious accelerations to p.a (dt: the step's, for the Coriolis term).
   void add_frame_accelerations(double dt);
+  // The phases of advance(), in order (each timed under its name; docs/architecture.md).
+  /// neighbours: keeps the lists while they hold, refreshes the movers' rows or searches afresh.
+  void update_neighbours(bool resampling, SphStepReport& report);
+  /// forces: density (summation) or pressure from the carried density, accelerations, the density
+  /// rate (continuity) and the shifting gradient; throws naming a particle whose terms are not finite.
+  void forces(double dt, SphStepReport& report, std::vector<Vec<Dim>>& shift);
   /// The every-k-th-step phases on the current neighbour lists: redistance, and when adaptive elfs
   /// and resample (timed under those names).
   void redistance_and_resample(SphStepReport& report);
+  /// integrate: symplectic Euler (v, then x, then the continuity density); shift may be empty.
+  void integrate(double dt, const std::vector<Vec<Dim>>& shift);
+  /// The step's tallies: particles per level, the largest speed.
+  void tally(double dt, SphStepReport& report) const;
   /// Throws liquid::Error naming particle i, its state and the term of its acceleration that is not
   /// finite.
   [[noreturn]] void throw_not_finite(int i) const;

@@ -44,7 +44,7 @@ TEST(Scene, EveryBuiltinSceneLoadsInItsDimension) {
 
 TEST(Scene, ValuesAndOverridesReachTheSolverOptions) {
   Scene<2> s = load_scene<2>(find_scene("drop-2d"));
-  EXPECT_EQ(s.pic.fine_level, 6);
+  EXPECT_EQ(s.pic.finest_level, 6);
   EXPECT_EQ(s.pic.coarse_level, 3);
   EXPECT_EQ(s.pic.max_jump, 2);
   EXPECT_TRUE(s.pic.adaptive);
@@ -61,7 +61,7 @@ TEST(Scene, ValuesAndOverridesReachTheSolverOptions) {
   apply_overrides<2>(o, s);
   EXPECT_EQ(s.pic.transfer, PicTransfer::apic);
   EXPECT_FALSE(s.pic.adaptive);
-  EXPECT_EQ(s.pic.fine_level, 5);
+  EXPECT_EQ(s.pic.finest_level, 5);
   EXPECT_EQ(s.pic.coarse_level, 2);
   EXPECT_EQ(s.time.steps, 3);
   SceneOverrides bad;
@@ -71,9 +71,40 @@ TEST(Scene, ValuesAndOverridesReachTheSolverOptions) {
   EXPECT_TRUE(s.pic.rbf.share_factors);  // the defaults
   EXPECT_EQ(s.pic.rbf.condition_estimate, rbf::ConditionEstimate::probes);
   EXPECT_EQ(s.pic.poisson.nullspace, mac::Nullspace::zero_mean);
-  EXPECT_EQ(s.pic.rbf.exponent, 5);  // the paper's transfer and reseeding
-  EXPECT_EQ(s.pic.rbf.degree, 2);
+  EXPECT_EQ(s.pic.rbf.exponent, 3);  // the default transfer; reseeding left to the method (holes only)
+  EXPECT_EQ(s.pic.rbf.degree, 1);
   EXPECT_EQ(s.pic.reseeding.lo, 0);
+  EXPECT_FALSE(s.paper_preset);
+  {
+    // --paper: the paper's transfer and its reseeding band, remembered by the scene.
+    Scene<2> paper = load_scene<2>(find_scene("drop-2d"));
+    SceneOverrides p;
+    p.paper = true;
+    apply_overrides<2>(p, paper);
+    EXPECT_TRUE(paper.paper_preset);
+    EXPECT_TRUE(paper.pic.paper_preset());
+    EXPECT_EQ(paper.pic.rbf.exponent, 5);
+    EXPECT_EQ(paper.pic.rbf.degree, 2);
+    EXPECT_EQ(paper.pic.reseeding.lo, 3);
+    EXPECT_EQ(paper.pic.reseeding.hi, 12);
+  }
+  {
+    // [solver] preset = "paper" does the same; a key after it overrides what the preset set.
+    std::ifstream in(find_scene("drop-2d"));
+    std::stringstream text;
+    text << in.rdbuf();
+    std::string toml = text.str();
+    const auto at = toml.find("[solver]");
+    const std::string keys = "\npreset = \"paper\"\ntransfer_degree = 1";
+    toml = at == std::string::npos ? toml + "\n[solver]" + keys + "\n" : toml.insert(at + 8, keys);
+    const std::string path = ::testing::TempDir() + "/paper-preset.toml";
+    std::ofstream(path) << toml;
+    const Scene<2> paper = load_scene<2>(path);
+    EXPECT_TRUE(paper.paper_preset);
+    EXPECT_EQ(paper.pic.rbf.exponent, 5);
+    EXPECT_EQ(paper.pic.rbf.degree, 1);
+    EXPECT_EQ(paper.pic.reseeding.lo, 3);
+  }
   {
     // [solver] share_factors = false and condition_estimate = "hager-higham" reach the transfer's
     // options, nullspace = "pin" the PPE's, and the transfer kernel and holes-only reseeding theirs.
@@ -152,7 +183,7 @@ TEST(Scene, ResumedRunEndsBitForBitLikeTheUninterruptedOne) {
     RunSettings again;
     again.out = temp_folder(std::string(name) + "-b");
     SceneRunner<2> resumed = SceneRunner<2>::resume(half, again);
-    EXPECT_EQ(resumed.solver().step(), 5);
+    EXPECT_EQ(resumed.solver().steps(), 5);
     while (!resumed.done()) resumed.step();
     const auto& a = full.solver().particles();
     const auto& b = resumed.solver().particles();
@@ -176,7 +207,7 @@ TEST(Scene, CheckpointOfAnotherDimensionOrWithoutItsSceneIsRefused) {
   settings.scene_path = path;
   settings.frames = false;
   Scene<2> scene = load_scene<2>(path);
-  scene.pic.fine_level = 4;
+  scene.pic.finest_level = 4;
   scene.pic.coarse_level = 2;
   SceneRunner<2> run(scene, settings);
   run.step();

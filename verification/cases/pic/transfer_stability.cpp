@@ -92,7 +92,7 @@ Row run_row(bool adaptive, const Transfer& t, int level, int steps) {
   o.domain = Box<Dim>{Vec<Dim>::Zero(), Vec<Dim>::Constant(M_PI)};
   o.gravity = Vec<Dim>::Zero();
   o.adaptive = adaptive;
-  o.fine_level = level;
+  o.finest_level = level;
   o.coarse_level = adaptive ? level - 1 : level;
   if (adaptive)
     o.refine = levelset::box<Dim>({Vec<Dim>::Constant(M_PI / 4), Vec<Dim>::Constant(3 * M_PI / 4)});
