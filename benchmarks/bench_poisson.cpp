@@ -24,7 +24,7 @@
 namespace liquid {
 namespace {
 
-CellGraph<3> scene_tree(int scene) {
+tree::CellGraph<3> scene_tree(int scene) {
   const Box<3> unit;
   if (scene == 0)
     return tree::narrow_band<3>(unit, levelset::sphere<3>(Vec<3>::Constant(0.5), 0.29), 4, 6, 2.0);
@@ -36,7 +36,7 @@ CellGraph<3> scene_tree(int scene) {
 void BM_PoissonAssembly(benchmark::State& state) {
   const int cache = static_cast<int>(state.range(0));
   const int degree = static_cast<int>(state.range(1));
-  const CellGraph<3> g = scene_tree(static_cast<int>(state.range(2)));
+  const tree::CellGraph<3> g = scene_tree(static_cast<int>(state.range(2)));
   mac::PoissonProblem<3> problem;
   problem.f = [](const Vec<3>& x) { return -3.0 * std::cos(x[0]) * std::cos(x[1]) * std::cos(x[2]); };
   problem.pin_value = [](const Vec<3>& x) { return std::cos(x[0]) * std::cos(x[1]) * std::cos(x[2]); };
@@ -70,7 +70,7 @@ BENCHMARK(BM_PoissonAssembly)
 // cost on top of the fill.
 void BM_PoissonAssemblyUniform(benchmark::State& state) {
   const int level = static_cast<int>(state.range(0));
-  const CellGraph<2> g = tree::uniform<2>({Vec<2>::Zero(), Vec<2>::Constant(M_PI)}, level);
+  const tree::CellGraph<2> g = tree::uniform<2>({Vec<2>::Zero(), Vec<2>::Constant(M_PI)}, level);
   mac::PoissonProblem<2> problem;
   problem.f = [](const Vec<2>& x) { return -2.0 * std::cos(x[0]) * std::cos(x[1]); };
   problem.pin_value = [](const Vec<2>& x) { return std::cos(x[0]) * std::cos(x[1]) - 1.0; };
@@ -128,7 +128,7 @@ void BM_PpeSolve(benchmark::State& state) {
   const bool adaptive = state.range(1) != 0;
   const int level = static_cast<int>(state.range(2));
   const Box<Dim> domain{Vec<Dim>::Zero(), Vec<Dim>::Constant(M_PI)};
-  const CellGraph<Dim> g =
+  const tree::CellGraph<Dim> g =
       adaptive ? tree::narrow_band<Dim>(domain, levelset::sphere<Dim>(Vec<Dim>::Constant(0.5 * M_PI), 0.9),
                                         level - 2, level, 2.0)
                : tree::uniform<Dim>(domain, level);

@@ -26,24 +26,24 @@ const char* kMethodNames[] = {
 
 template <int Dim>
 struct Scene {
-  CellGraph<Dim> graph;
-  std::unique_ptr<RegularLattice<Dim>> lattice;
-  Particles<Dim> particles;
-  CellBins bins;
-  FaceValues faces;
+  tree::CellGraph<Dim> graph;
+  std::unique_ptr<transfer::RegularLattice<Dim>> lattice;
+  particles::Particles<Dim> particles;
+  particles::CellBins bins;
+  transfer::FaceValues faces;
 
   Scene() : graph(tree::uniform<Dim>(Box<Dim>{}, Dim == 2 ? 8 : 5)) {
-    lattice = std::make_unique<RegularLattice<Dim>>(graph);
-    SeedOptions o;
+    lattice = std::make_unique<transfer::RegularLattice<Dim>>(graph);
+    particles::SeedOptions o;
     o.jitter = 0.5;
-    seed_region<Dim>(
+    particles::seed_region<Dim>(
         graph, [](const Vec<Dim>&) { return -1.0; }, o, particles);
     for (int i = 0; i < particles.size(); ++i)
       for (int k = 0; k < Dim; ++k) particles.v[i][k] = std::sin(3.0 * particles.x[i][(k + 1) % Dim] + k);
     particles.add_field("apic", Dim * Dim);
-    bin_particles<Dim>(graph, particles.x, bins);
+    particles::bin_particles<Dim>(graph, particles.x, bins);
     faces.reset(graph.face_capacity());
-    graph.for_each_face([&](FaceId f) { faces.value[f] = std::cos(2.0 * graph.face_centre(f)[0]); });
+    graph.for_each_face([&](tree::FaceId f) { faces.value[f] = std::cos(2.0 * graph.face_centre(f)[0]); });
   }
 };
 
@@ -53,28 +53,30 @@ Scene<Dim>& scene() {
   return s;
 }
 
-TransferOptions scattered(int method) {
+transfer::TransferOptions scattered(int method) {
   if (method == 5 || method == 6) {
-    TransferOptions o = TransferOptions::paper_rbf();
+    transfer::TransferOptions o = transfer::TransferOptions::paper_rbf();
     if (method == 5) o.share_factors = false;
     if (method == 6) o.condition_estimate = rbf::ConditionEstimate::hager_higham;
     return o;
   }
-  return method == 0 ? TransferOptions::paper_rbf()
-                     : (method == 1 ? TransferOptions::cubic_mls() : TransferOptions::linear_fit());
+  return method == 0 ? transfer::TransferOptions::paper_rbf()
+                     : (method == 1 ? transfer::TransferOptions::cubic_mls()
+                                    : transfer::TransferOptions::linear_fit());
 }
 
 template <int Dim>
 void BM_ToFaces(benchmark::State& state) {
   const int method = static_cast<int>(state.range(0));
   Scene<Dim>& s = scene<Dim>();
-  FaceValues out;
+  transfer::FaceValues out;
   for (auto _ : state) {
     if (method < 3 || method == 6)
-      particles_to_faces<Dim>(s.graph, s.particles, s.bins, scattered(method), out);
+      transfer::particles_to_faces<Dim>(s.graph, s.particles, s.bins, scattered(method), out);
     else
-      linear_to_faces<Dim>(s.graph, *s.lattice, s.particles, s.bins,
-                           method == 3 ? RegularScheme::pic : RegularScheme::apic, {}, out);
+      transfer::linear_to_faces<Dim>(
+          s.graph, *s.lattice, s.particles, s.bins,
+          method == 3 ? transfer::RegularScheme::pic : transfer::RegularScheme::apic, {}, out);
     benchmark::DoNotOptimize(out.value.data());
   }
   state.SetLabel(kMethodNames[method]);
@@ -92,10 +94,10 @@ void BM_ToParticles(benchmark::State& state) {
   std::vector<double> affine(static_cast<std::size_t>(s.particles.size()) * Dim * Dim);
   for (auto _ : state) {
     if (method < 3 || method == 5)
-      faces_to_points<Dim>(s.graph, s.faces.value, {}, s.particles.x, s.bins, scattered(method), v);
+      transfer::faces_to_points<Dim>(s.graph, s.faces.value, {}, s.particles.x, s.bins, scattered(method), v);
     else
-      linear_to_points<Dim>(*s.lattice, s.faces.value, s.particles.x, v,
-                            method == 4 ? std::span<double>(affine) : std::span<double>{});
+      transfer::linear_to_points<Dim>(*s.lattice, s.faces.value, s.particles.x, v,
+                                      method == 4 ? std::span<double>(affine) : std::span<double>{});
     benchmark::DoNotOptimize(v.data());
   }
   state.SetLabel(kMethodNames[method]);
@@ -109,7 +111,7 @@ void BM_ToParticles(benchmark::State& state) {
 template <int Dim>
 void BM_Binning(benchmark::State& state) {
   const auto phi = levelset::sphere<Dim>(Vec<Dim>::Constant(0.5), 0.3);
-  static const CellGraph<Dim> g =
+  static const tree::CellGraph<Dim> g =
       tree::narrow_band<Dim>(Box<Dim>{}, phi, Dim == 2 ? 5 : 3, Dim == 2 ? 10 : 7, 2.0);
   constexpr int n = 1 << 20;
   static std::vector<Vec<Dim>> x0, x1;
@@ -124,15 +126,15 @@ void BM_Binning(benchmark::State& state) {
         x1[i][k] = std::clamp(x0[i][k] + step * d(rng), 0.0, 1.0);
       }
   }
-  CellBins bins;
-  bin_particles<Dim>(g, x0, bins);
-  BinStats stats;
+  particles::CellBins bins;
+  particles::bin_particles<Dim>(g, x0, bins);
+  particles::BinStats stats;
   bool odd = false;
   for (auto _ : state) {
     if (state.range(0) == 0) {
-      bin_particles<Dim>(g, x0, bins);
+      particles::bin_particles<Dim>(g, x0, bins);
     } else {
-      stats = rebin<Dim>(g, odd ? x0 : x1, bins);
+      stats = particles::rebin<Dim>(g, odd ? x0 : x1, bins);
       odd = !odd;
     }
     benchmark::DoNotOptimize(bins.index.data());

@@ -27,7 +27,7 @@ levelset::Function<3> sphere(const Vec<3>& centre, double radius = 0.3) {
 
 /// Octrees by size: 0 uniform level 6 (262k), 1 banded level 5 (+2 in a band, ~185k),
 /// 2 banded level 6 (~870k), 3 narrow band to level 9 (~1.8M), 4 uniform level 7 (2.1M).
-CellGraph<3> make_tree(int which) {
+tree::CellGraph<3> make_tree(int which) {
   const Box<3> unit;
   const auto phi = sphere(Vec<3>::Constant(0.5));
   switch (which) {
@@ -45,8 +45,8 @@ CellGraph<3> make_tree(int which) {
 }
 
 /// One shared ~1M-leaf octree for the query benchmarks.
-const CellGraph<3>& million() {
-  static const CellGraph<3> g = make_tree(2);
+const tree::CellGraph<3>& million() {
+  static const tree::CellGraph<3> g = make_tree(2);
   return g;
 }
 
@@ -54,7 +54,7 @@ void BM_TreeBuild(benchmark::State& state) {
   const int which = static_cast<int>(state.range(0));
   int n_cells = 0, n_faces = 0;
   for (auto _ : state) {
-    const CellGraph<3> g = make_tree(which);
+    const tree::CellGraph<3> g = make_tree(which);
     n_cells = g.n_cells();
     n_faces = g.n_faces();
     benchmark::DoNotOptimize(n_cells);
@@ -74,24 +74,24 @@ BENCHMARK(BM_TreeBuild)->DenseRange(0, 4)->Unit(benchmark::kMillisecond)->UseRea
 /// cells split (balancing included) and the groups merged. The tree drifts (splits succeed more
 /// often than merges), so leaves_start and leaves (at the end) bracket its size.
 void BM_TreeSplitMerge(benchmark::State& state) {
-  CellGraphOptions<3> options;
+  tree::CellGraphOptions<3> options;
   options.max_jump = static_cast<int>(state.range(0));
-  CellGraph<3> g = tree::random<3>(Box<3>{}, 7, 2, 7, 0.35, options);
+  tree::CellGraph<3> g = tree::random<3>(Box<3>{}, 7, 2, 7, 0.35, options);
   const int leaves_start = g.n_cells();
   std::mt19937_64 rng(1);
   long splits = 0, balance = 0, merges = 0, tries = 0;
   const int max_level = 8;
   const auto pick = [&] {
-    CellId c;
+    tree::CellId c;
     do {
-      c = static_cast<CellId>(rng() % g.cell_capacity());
+      c = static_cast<tree::CellId>(rng() % g.cell_capacity());
     } while (!g.alive(c));
     return c;
   };
-  AdaptReport report;
+  tree::AdaptReport report;
   for (auto _ : state) {
     ++tries;
-    const CellId c = pick();
+    const tree::CellId c = pick();
     if (rng() % 2 == 0) {
       if (g.level(c) >= max_level) continue;
       g.split(c, &report);
@@ -111,16 +111,16 @@ void BM_TreeSplitMerge(benchmark::State& state) {
   state.counters["leaves_start"] = leaves_start;
   state.counters["leaves"] = g.n_cells();
 }
-BENCHMARK(BM_TreeSplitMerge)->Arg(1)->Arg(2)->Arg(unlimited_jump)->UseRealTime();
+BENCHMARK(BM_TreeSplitMerge)->Arg(1)->Arg(2)->Arg(tree::unlimited_jump)->UseRealTime();
 
 void BM_TreeLocate(benchmark::State& state) {
-  const CellGraph<3>& g = million();
+  const tree::CellGraph<3>& g = million();
   const bool parallel = state.range(0) != 0;
   std::mt19937_64 rng(2);
   std::uniform_real_distribution<double> u(0.0, 1.0);
   std::vector<Vec<3>> points(1 << 20);
   for (auto& x : points) x = Vec<3>(u(rng), u(rng), u(rng));
-  std::vector<CellId> out(points.size());
+  std::vector<tree::CellId> out(points.size());
   for (auto _ : state) {
     if (parallel) {
       g.locate(points, out);
@@ -137,7 +137,7 @@ void BM_TreeLocate(benchmark::State& state) {
 BENCHMARK(BM_TreeLocate)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 void BM_TreeKRing(benchmark::State& state) {
-  const CellGraph<3>& g = million();
+  const tree::CellGraph<3>& g = million();
   const int k = static_cast<int>(state.range(0));
   const auto ids = g.cell_ids();
   const long n_queries = 1 << 16;
@@ -146,7 +146,7 @@ void BM_TreeKRing(benchmark::State& state) {
     found = 0;
 #pragma omp parallel reduction(+ : found)
     {
-      std::vector<CellId> ring;
+      std::vector<tree::CellId> ring;
 #pragma omp for schedule(static)
       for (long q = 0; q < n_queries; ++q) {
         g.k_ring(ids[(q * 2654435761L) % ids.size()], k, ring);
@@ -178,13 +178,14 @@ void BM_TreeReadapt(benchmark::State& state) {
   const double h = std::ldexp(1.0, -fine);
   const double band = 1.0;
   Vec<3> centre = Vec<3>::Constant(0.5);
-  CellGraph<3> g = tree::narrow_band<3>(Box<3>{}, sphere(centre, radius), coarse, fine, band);
+  tree::CellGraph<3> g = tree::narrow_band<3>(Box<3>{}, sphere(centre, radius), coarse, fine, band);
   Stopwatch watch;
-  const CellGraph<3> rebuilt = tree::narrow_band<3>(Box<3>{}, sphere(centre, radius), coarse, fine, band);
+  const tree::CellGraph<3> rebuilt =
+      tree::narrow_band<3>(Box<3>{}, sphere(centre, radius), coarse, fine, band);
   const double full_build = watch.seconds();
-  NarrowBandTracker<3> tracker(g, coarse, fine, band);
-  std::vector<Mark> marks;
-  MarkList list;
+  tree::NarrowBandTracker<3> tracker(g, coarse, fine, band);
+  std::vector<tree::Mark> marks;
+  tree::MarkList list;
   long changed = 0, steps = 0, visited = 0;
   double mark_seconds = 0.0, adapt_seconds = 0.0;
   // One re-adaptation to the sphere at `centre`, its parts timed into the totals.
@@ -200,7 +201,7 @@ void BM_TreeReadapt(benchmark::State& state) {
     }
     mark_seconds += watch.seconds();
     watch.restart();
-    const AdaptReport report = tracked ? g.adapt(list) : g.adapt(marks);
+    const tree::AdaptReport report = tracked ? g.adapt(list) : g.adapt(marks);
     if (tracked) tracker.update(g, report);
     adapt_seconds += watch.seconds();
     changed += static_cast<long>(report.new_cells.size() + report.removed_cells.size());

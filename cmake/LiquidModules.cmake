@@ -7,7 +7,9 @@
 #   - liquid-layer-NAME links the whole archive of the module against its declared modules only,
 #     so a call into an undeclared module is an undefined reference;
 #   - liquid_layers scans every #include "liquid/<module>/..." of every module (headers too) and
-#     fails naming file:line when <module> is not NAME or a declared (transitive) dependency.
+#     fails naming file:line when <module> is not NAME or a declared (transitive) dependency. The
+#     same scan fails on a `namespace X {` at column 0 that is not the module's own (liquid::NAME or
+#     inside it, a nested `detail`; core: liquid or inside it): docs/architecture.md, "Namespaces".
 
 set_property(GLOBAL PROPERTY LIQUID_MODULES "")
 
@@ -78,7 +80,7 @@ function(liquid_layer_check)
     COMMAND ${CMAKE_COMMAND} "-DSPEC=${spec}" -DROOT=${CMAKE_CURRENT_SOURCE_DIR}/liquid -DSTAMP=${stamp}
             -P ${PROJECT_SOURCE_DIR}/cmake/check_layers.cmake
     DEPENDS ${files} ${PROJECT_SOURCE_DIR}/cmake/check_layers.cmake
-    COMMENT "Checking that every module includes only the modules it declares"
+    COMMENT "Checking that every module includes only the modules it declares and uses its own namespace"
     VERBATIM)
   add_custom_target(liquid_layers ALL DEPENDS ${stamp})
 endfunction()

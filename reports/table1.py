@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """Table 1 of RBF Liquids for our scenes, from the JSON files ci/bench-scenes writes.
 
-Usage: table1.py DIR
+Usage: table1.py DIR [--gate REFERENCE.toml [--bless]]
 
 Every DIR/<scene>-<dim>d-L<level>-<method>-r<k>.json is one run (liquid run --json). Per scene,
 dimension and level: the median over repeats of each figure; the adaptive run's fluid cells and
@@ -9,6 +9,12 @@ particles as a share of the regular APIC run's (both measured); seconds per step
 laplacian, transfers (p2g + g2p), advect and total; seconds per particle-step and per cell-step;
 and the paper's row (3D, 16 cores) with the ratio of core-seconds per particle-step, ours over the
 paper's. Writes DIR/table1.md and prints it.
+
+With --gate (the scale tier, ci/bench-scenes --paper-sizes): a table of the ratios per scene and
+size (adaptive over regular APIC seconds a step, shares of fluid cells and particles, core-us per
+particle-step beside the paper's row at the same h, peak memory), checked against the accepted
+ratios in REFERENCE.toml: exit 1 naming every ratio that grew past its tolerance; --bless writes
+the file from this run instead.
 """
 
 import json
@@ -17,6 +23,7 @@ import pathlib
 import re
 import statistics
 import sys
+import tomllib
 
 # RBF Liquids, Table 1 (3D, h, #cells (% of regular), #particles (%), T_grid, T_PPE, T_Lap, T_vel,
 # total; seconds per step on a 16-core Ryzen 9 3950X).
@@ -34,6 +41,7 @@ def median_run(runs):
     """Median of every figure over repeated runs."""
     out = {k: statistics.median(r[k] for r in runs)
            for k in ("fluid_cells", "particles", "cells", "regular_cells", "regular_particles", "steps")}
+    out["peak_mb"] = statistics.median(r.get("peak_memory_mb", float("nan")) for r in runs)
     phases = set().union(*(r["seconds_per_step"] for r in runs))
     out["sec"] = {p: statistics.median(r["seconds_per_step"].get(p, 0.0) for r in runs) for p in phases}
     out["threads"] = runs[0]["threads"]
@@ -184,11 +192,125 @@ def growth(groups, folder):
     return lines
 
 
+GATED = ("time", "cells", "particles")
+GATE_HELP = {"time": "adaptive / regular APIC seconds a step", "cells": "adaptive / regular fluid cells",
+             "particles": "adaptive / regular particles"}
+
+
+def read_reference(path):
+    """The accepted ratios: {(scene, level): {figure: value}}, and the tolerances. Strict: an unknown
+    key, a missing one or a value that is not a positive number is an error naming the entry."""
+    doc = tomllib.loads(pathlib.Path(path).read_text())
+    unknown = set(doc) - {"tolerance", "ratio"}
+    if unknown:
+        raise ValueError(f"{path}: unknown table(s) {sorted(unknown)} (known: tolerance, ratio)")
+    tol = doc.get("tolerance", {})
+    if set(tol) != {"time_rel", "share_rel"}:
+        raise ValueError(f"{path}: [tolerance] must hold exactly time_rel and share_rel, found {sorted(tol)}")
+    accepted = {}
+    for k, entry in enumerate(doc.get("ratio", [])):
+        keys = {"scene", "level", "window"} | set(GATED)
+        if set(entry) != keys:
+            raise ValueError(f"{path}: [[ratio]] #{k + 1}: keys {sorted(entry)}, expected {sorted(keys)}")
+        for f in GATED:
+            if not isinstance(entry[f], (int, float)) or not entry[f] > 0 or math.isinf(entry[f]):
+                raise ValueError(f"{path}: [[ratio]] #{k + 1} ({entry['scene']}, {entry['level']}): '{f}' "
+                                 f"must be a positive number, found {entry[f]!r}")
+        accepted[(entry["scene"], int(entry["level"]))] = entry
+    for name in ("time_rel", "share_rel"):
+        if not isinstance(tol[name], (int, float)) or not 0 <= tol[name] < 10:
+            raise ValueError(f"{path}: tolerance.{name} must be a number in [0, 10), found {tol[name]!r}")
+    return accepted, tol
+
+
+def scale_ratios(groups):
+    """Per (scene, level) with both runs: the gated ratios, and what the table prints beside them."""
+    rows = {}
+    for (scene, dim, level), methods in sorted(groups.items()):
+        if dim != 3 or "adaptive-rbf" not in methods or "regular-apic" not in methods:
+            continue
+        a, g = median_run(methods["adaptive-rbf"]), median_run(methods["regular-apic"])
+        ta, tg = a["sec"].get("total", float("nan")), g["sec"].get("total", float("nan"))
+        core_us = 1e6 * ta * a["threads"] / a["particles"]
+        paper = [p for p in PAPER.get(scene, []) if p[1] == f"2^-{level}"]
+        paper_us = 1e6 * paper[0][10] * PAPER_CORES / paper[0][4] if paper else float("nan")
+        rows[(f"{scene}-3d", level)] = {
+            "time": ta / tg, "cells": a["fluid_cells"] / g["fluid_cells"], "particles": a["particles"] / g["particles"],
+            "window": f'{a["steps"]:.0f} steps (regular {g["steps"]:.0f})', "ta": ta, "tg": tg,
+            "core_us": core_us, "paper_us": paper_us, "per_particle": (ta / a["particles"]) / (tg / g["particles"]),
+            "peak_a": a["peak_mb"], "peak_g": g["peak_mb"], "same_window": a["steps"] == g["steps"]}
+    return rows
+
+
+def scale_table(rows):
+    lines = ["", "## Scale tier: the gain at the paper's sizes (ci/bench-scenes --paper-sizes)", "",
+             "Adaptive RBF against regular APIC at the same finest h, over the stated window of steps from the "
+             "start. speed-up: regular seconds a step over adaptive; shares: adaptive over regular; "
+             "per particle-step: adaptive's cost over regular's; core-us: total seconds x threads per particle, "
+             "beside the paper's row at the same h (16 cores).", "",
+             "| scene | h | window | adaptive s/step | regular s/step | speed-up | fluid cells | particles | "
+             "per particle-step | core-us adaptive | core-us paper | ours / paper | peak MB adaptive | "
+             "peak MB regular |",
+             "| --- | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"]
+    for (scene, level), r in rows.items():
+        lines.append(
+            f"| {scene} | 2^-{level} | {r['window']} | {r['ta']:.3f} | {r['tg']:.3f} | {1 / r['time']:.2f}x | "
+            f"{100 * r['cells']:.0f}% | {100 * r['particles']:.0f}% | {r['per_particle']:.2f} | {r['core_us']:.1f} | "
+            f"{r['paper_us']:.1f} | {r['core_us'] / r['paper_us']:.3f} | {r['peak_a']:.0f} | {r['peak_g']:.0f} |")
+    return lines
+
+
+def gate(rows, path, bless):
+    """Compares the ratios with the accepted ones (or writes them); returns the exit status."""
+    if bless:
+        text = ["# Accepted ratios of the scale tier (ci/bench-scenes --paper-sizes), checked by reports/table1.py.",
+                "# Written by LIQUID_SCALE_BLESS=1 ci/bench-scenes --paper-sizes; a commit that moves them says why.",
+                "# time: adaptive / regular APIC seconds a step; cells, particles: adaptive / regular.", "",
+                "[tolerance]", "time_rel = 0.3", "share_rel = 0.05"]
+        for (scene, level), r in rows.items():
+            if not r["same_window"]:
+                continue  # the 2^-8 regular runs are a shorter window: printed, not gated
+            text += ["", "[[ratio]]", f'scene = "{scene}"', f"level = {level}", f'window = "{r["window"]}"']
+            text += [f"{f} = {r[f]:.4g}" for f in GATED]
+        pathlib.Path(path).write_text("\n".join(text) + "\n")
+        print(f"table1: wrote {path}")
+        return 0
+    accepted, tol = read_reference(path)
+    failures = []
+    for key, entry in accepted.items():
+        if key not in rows:
+            failures.append(f"{path}: {key[0]} at 2^-{key[1]}: accepted, but this run made no such pair of runs")
+            continue
+        for f in GATED:
+            limit = entry[f] * (1 + (tol["time_rel"] if f == "time" else tol["share_rel"]))
+            now = rows[key][f]
+            status = "ok" if now <= limit else "REGRESSION"
+            print(f"table1 gate: {key[0]} 2^-{key[1]} {GATE_HELP[f]}: accepted {entry[f]:.4g}, now {now:.4g}, "
+                  f"allowed {limit:.4g}: {status}")
+            if now > limit:
+                failures.append(f"{key[0]} at 2^-{key[1]}: {GATE_HELP[f]} {now:.4g} > {limit:.4g}")
+    for f in failures:
+        print(f"table1 gate: {f}", file=sys.stderr)
+    return 1 if failures else 0
+
+
 def main():
-    if len(sys.argv) != 2:
+    args = sys.argv[1:]
+    bless = "--bless" in args
+    if bless:
+        args.remove("--bless")
+    reference = None
+    if "--gate" in args:
+        i = args.index("--gate")
+        if i + 1 >= len(args):
+            print(__doc__, file=sys.stderr)
+            return 2
+        reference = args[i + 1]
+        del args[i:i + 2]
+    if len(args) != 1 or (bless and reference is None):
         print(__doc__, file=sys.stderr)
         return 2
-    folder = pathlib.Path(sys.argv[1])
+    folder = pathlib.Path(args[0])
     groups = {}
     for path in sorted(folder.glob("*.json")):
         m = NAME.match(path.stem)
@@ -242,9 +364,18 @@ def main():
                          f"{100 * p[6] / p[10]:.1f} | {1e6 * p[10] / p[4]:.2f} | {1e6 * p[10] / p[2]:.2f} | 16 | 1.00 |")
     lines += phase_bars(groups, folder)
     lines += growth(groups, folder)
+    rows = scale_ratios(groups) if reference else {}
+    if reference:
+        lines += scale_table(rows)
     text = "\n".join(lines) + "\n"
     (folder / "table1.md").write_text(text)
     print(text)
+    if reference:
+        try:
+            return gate(rows, reference, bless)
+        except (ValueError, tomllib.TOMLDecodeError, OSError) as e:
+            print(f"table1 gate: {e}", file=sys.stderr)
+            return 2
     return 0
 
 

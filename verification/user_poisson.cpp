@@ -107,11 +107,11 @@ CaseResult run(const UserPoissonArgs& args) {
   static const std::regex random(R"(^random:(\d+)$)");
   if (args.tree == "uniform") {
     s.finest_offset = 0;
-    s.make_tree = [domain](int level, const CellGraphOptions<Dim>& o) {
+    s.make_tree = [domain](int level, const tree::CellGraphOptions<Dim>& o) {
       return tree::uniform<Dim>(domain, level, o);
     };
   } else if (args.tree == "band") {
-    s.make_tree = [domain, band_phi](int level, const CellGraphOptions<Dim>& o) {
+    s.make_tree = [domain, band_phi](int level, const tree::CellGraphOptions<Dim>& o) {
       return tree::banded<Dim>(domain, band_phi, level, 3.0, o);
     };
   } else if (std::regex_match(args.tree, m, random)) {
@@ -121,7 +121,7 @@ CaseResult run(const UserPoissonArgs& args) {
     LIQUID_VERIFY(ec == std::errc() && end == digits.data() + digits.size(),
                   "--tree {}: the seed is out of range (at most {})", args.tree,
                   std::numeric_limits<std::uint64_t>::max());
-    s.make_tree = [domain, seed](int level, const CellGraphOptions<Dim>& o) {
+    s.make_tree = [domain, seed](int level, const tree::CellGraphOptions<Dim>& o) {
       return tree::random<Dim>(domain, seed, level, level + 2, 0.3, o);
     };
   } else {
@@ -149,11 +149,11 @@ CaseResult run(const UserPoissonArgs& args) {
   if (phi) {
     // Later rows only refine the region, so a level set negative at no centre of the first row's
     // tree leaves no unknowns: say so by the argument's name before any solve.
-    CellGraphOptions<Dim> o;
+    tree::CellGraphOptions<Dim> o;
     o.max_jump = s.max_jump;
-    const CellGraph<Dim> first = s.make_tree(s.level_min, o);
+    const tree::CellGraph<Dim> first = s.make_tree(s.level_min, o);
     bool inside = false;
-    first.for_each_cell([&](CellId c) { inside = inside || (*phi)(first.centre(c)) < 0.0; });
+    first.for_each_cell([&](tree::CellId c) { inside = inside || (*phi)(first.centre(c)) < 0.0; });
     LIQUID_VERIFY(
         inside, "--levelset '{}' is negative at no cell centre of the level {} tree ({} cells): no unknowns",
         args.levelset, s.level_min, first.n_cells());

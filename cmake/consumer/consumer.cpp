@@ -9,7 +9,7 @@
 int main() {
   using namespace liquid;
   const Box<2> box{Vec<2>::Zero(), Vec<2>::Ones()};
-  const CellGraph<2> graph = tree::uniform<2>(box, 4);
+  const tree::CellGraph<2> graph = tree::uniform<2>(box, 4);
   mac::PoissonProblem<2> problem;
   problem.f = [](const Vec<2>&) { return 2.0; };  // p = x^2 with Dirichlet walls
   problem.boundary.dirichlet_walls = true;

@@ -13,6 +13,7 @@
 // an option); 3 an internal error.
 #include <fmt/format.h>
 #include <omp.h>
+#include <sys/resource.h>
 #include <unistd.h>
 #include <CLI/CLI.hpp>
 
@@ -34,7 +35,7 @@ using namespace liquid;
 
 struct Args {
   std::string scene, out, json, resume;
-  SceneOverrides overrides;
+  scene::SceneOverrides overrides;
   long checkpoint_every = 0;
   bool regular = false, adaptive = false, no_frames = false, quiet = false;
 };
@@ -45,8 +46,8 @@ struct RunFailure {
 };
 
 /// The last lines of the echo: when the run ends, what it writes, the threads.
-void echo_time_and_output(const SceneTime& time, const SceneOutput& output, const RunSettings& settings,
-                          const char* cfl_note) {
+void echo_time_and_output(const scene::SceneTime& time, const scene::SceneOutput& output,
+                          const scene::RunSettings& settings, const char* cfl_note) {
   if (time.steps >= 0)
     fmt::print("  time        {} steps", time.steps);
   else
@@ -67,8 +68,8 @@ void echo_time_and_output(const SceneTime& time, const SceneOutput& output, cons
 }
 
 template <int Dim>
-void echo(const Scene<Dim>& s, const RunSettings& settings, bool resumed) {
-  const PicOptions<Dim>& o = s.pic;
+void echo(const scene::Scene<Dim>& s, const scene::RunSettings& settings, bool resumed) {
+  const pic::PicOptions<Dim>& o = s.pic;
   fmt::print("liquid run: scene {} ({}D) from {}{}\n", s.name, Dim, s.path, resumed ? " (resumed)" : "");
   if (!s.description.empty()) fmt::print("  {}\n", s.description);
   fmt::print("  domain      [{}] to [{}]\n", fmt::join(o.domain.lo.data(), o.domain.lo.data() + Dim, ", "),
@@ -77,11 +78,11 @@ void echo(const Scene<Dim>& s, const RunSettings& settings, bool resumed) {
              o.adaptive ? "adaptive tree" : "regular grid", o.finest_level,
              std::ldexp(o.domain.size().minCoeff(), -o.finest_level),
              o.adaptive ? o.coarse_level : o.finest_level, o.band,
-             o.max_jump >= unlimited_jump ? std::string("unlimited") : std::to_string(o.max_jump));
-  const bool rbf_transfer = o.transfer == PicTransfer::rbf;
+             o.max_jump >= tree::unlimited_jump ? std::string("unlimited") : std::to_string(o.max_jump));
+  const bool rbf_transfer = o.transfer == pic::PicTransfer::rbf;
   fmt::print("  method      {}{}; {}; reseeding {}{}{}{}\n", to_string(o.transfer),
-             o.transfer == PicTransfer::flip ? fmt::format(" (blend {})", o.flip) : "",
-             o.integrator == Integrator::rk2 ? "RK2" : "RK3", o.reseed ? "on" : "off",
+             o.transfer == pic::PicTransfer::flip ? fmt::format(" (blend {})", o.flip) : "",
+             o.integrator == particles::Integrator::rk2 ? "RK2" : "RK3", o.reseed ? "on" : "off",
              rbf_transfer && !o.rbf.share_factors ? "; each cell's own RBF factors" : "",
              rbf_transfer && o.rbf.condition_estimate == rbf::ConditionEstimate::hager_higham
                  ? "; full Hager-Higham condition estimates"
@@ -106,10 +107,10 @@ void echo(const Scene<Dim>& s, const RunSettings& settings, bool resumed) {
                  s.paper_preset ? " (the paper's preset)" : "");
   }
   fmt::print("  surface     {}\n",
-             o.surface == PicSurface::air_cells
+             o.surface == pic::PicSurface::air_cells
                  ? std::string("p = 0 at the air cells' centres")
                  : fmt::format("p = 0 at the particles' level set (radius {} h)", o.surface_radius));
-  if (o.projection == PicProjection::mass)
+  if (o.projection == pic::PicProjection::mass)
     fmt::print(
         "  projection  orthogonal in the faces' transferred masses (lightest face {} of a full cell's); it "
         "does not keep a still pool still (hydrostatic-pool)\n",
@@ -132,9 +133,9 @@ void echo(const Scene<Dim>& s, const RunSettings& settings, bool resumed) {
 }
 
 template <int Dim>
-void echo_sph(const Scene<Dim>& s, const RunSettings& settings, bool resumed) {
-  const sph::SphOptions<Dim> o = sph_options<Dim>(s);
-  const SphScene<Dim>& sc = s.sph_scene;
+void echo_sph(const scene::Scene<Dim>& s, const scene::RunSettings& settings, bool resumed) {
+  const sph::SphOptions<Dim> o = scene::sph_options<Dim>(s);
+  const scene::SphScene<Dim>& sc = s.sph_scene;
   fmt::print("liquid run: scene {} ({}D, SPH) from {}{}\n", s.name, Dim, s.path, resumed ? " (resumed)" : "");
   if (!s.description.empty()) fmt::print("  {}\n", s.description);
   fmt::print("  container   [{}] to [{}]\n",
@@ -145,7 +146,7 @@ void echo_sph(const Scene<Dim>& s, const RunSettings& settings, bool resumed) {
                                       o.max_level, o.resampling.alpha, o.resampling.beta, o.resample_every)
                         : std::string("single resolution (level 0 only)"));
   fmt::print("  fluid       rho_0 {} kg/m^{}, sound speed {:.3g} m/s{}, viscosity {} Pa s\n",
-             o.fluid.rest_density, Dim, sph_sound_speed<Dim>(s),
+             o.fluid.rest_density, Dim, scene::sph_sound_speed<Dim>(s),
              sc.sound_speed > 0 ? "" : " (10x the fastest expected speed)", o.fluid.viscosity);
   fmt::print("  model       kernels {}, density {}, pressure {}, neighbours {}, surface {}\n",
              sph::to_string(o.fluid.kernels), sph::to_string(o.fluid.density_update),
@@ -167,18 +168,18 @@ class Progress {
  public:
   explicit Progress(bool quiet) : tty_(isatty(fileno(stdout)) != 0), quiet_(quiet) {}
   template <int Dim>
-  void update(const SceneRunner<Dim>& run, bool last) {
-    const Scene<Dim>& s = run.scene();
-    const AdaptivePic<Dim>& sim = run.solver();
-    const PicStepReport& r = run.last();
+  void update(const scene::SceneRunner<Dim>& run, bool last) {
+    const scene::Scene<Dim>& s = run.scene();
+    const pic::AdaptivePic<Dim>& sim = run.solver();
+    const pic::PicStepReport& r = run.last();
     show(fraction(s, sim.steps(), sim.time()),
          fmt::format("t = {:.4f} s  step {}  particles {}  cells {} ({} fluid)  {:.3f} s/step", sim.time(),
                      sim.steps(), r.n_particles, r.n_cells, r.n_fluid_cells, per_step(sim.timer())),
          last);
   }
   template <int Dim>
-  void update(const SphSceneRunner<Dim>& run, bool last) {
-    const Scene<Dim>& s = run.scene();
+  void update(const scene::SphSceneRunner<Dim>& run, bool last) {
+    const scene::Scene<Dim>& s = run.scene();
     const sph::AdaptiveSph<Dim>& sim = run.solver();
     const sph::SphStepReport& r = run.last();
     std::string levels;
@@ -192,7 +193,7 @@ class Progress {
 
  private:
   template <int Dim>
-  static double fraction(const Scene<Dim>& s, long step, double time) {
+  static double fraction(const scene::Scene<Dim>& s, long step, double time) {
     return s.time.steps >= 0 ? static_cast<double>(step) / s.time.steps : time / s.time.end;
   }
   static double per_step(const PhaseTimer& timer) {
@@ -223,7 +224,7 @@ class Progress {
 };
 
 /// The paper's Table 1 row (RBF Liquids, Sec. 6) and every phase.
-void print_summary(const RunSummary& s, const std::string& name, int dim) {
+void print_summary(const scene::RunSummary& s, const std::string& name, int dim) {
   const auto pct = [](double a, double b) { return b > 0 ? 100.0 * a / b : 0.0; };
   const auto sec = [&](const char* phase) {
     const auto it = s.seconds.find(phase);
@@ -264,7 +265,14 @@ void write_text(const std::string& path, const std::string& text) {
   LIQUID_VERIFY(std::rename(tmp.c_str(), path.c_str()) == 0, "cannot rename {} to {}", tmp, path);
 }
 
-void write_json(const std::string& path, const RunSummary& s, const std::string& name, int dim) {
+/// The process's peak resident memory so far, in MB (getrusage; Linux reports kB).
+double peak_memory_mb() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return static_cast<double>(usage.ru_maxrss) / 1024.0;
+}
+
+void write_json(const std::string& path, const scene::RunSummary& s, const std::string& name, int dim) {
   std::string phases;
   for (const auto& [phase, t] : s.seconds)
     phases += fmt::format("{}\"{}\": {:.6g}", phases.empty() ? "" : ", ", phase, t);
@@ -273,14 +281,15 @@ void write_json(const std::string& path, const RunSummary& s, const std::string&
       "  \"fluid_cells\": {:.6g}, \"cells\": {:.6g}, \"particles\": {:.6g},\n"
       "  \"regular_cells\": {:.6g}, \"regular_particles\": {:.6g},\n"
       "  \"ppe_iterations\": {}, \"ppe_failures\": {}, \"ppe_reused\": {}, \"wall_seconds\": {:.6g},\n"
+      "  \"peak_memory_mb\": {:.1f},\n"
       "  \"seconds_per_step\": {{{}}}\n}}\n",
       name, dim, s.steps, s.time, s.threads, s.fluid_cells, s.cells, s.particles, s.regular_cells,
-      s.regular_particles, s.ppe_iterations, s.ppe_failures, s.ppe_reused, s.wall, phases);
+      s.regular_particles, s.ppe_iterations, s.ppe_failures, s.ppe_reused, s.wall, peak_memory_mb(), phases);
   write_text(path, text);
 }
 
 /// The paper's Table 1 columns (Adams et al. 2007, Sec. 6) and every phase.
-void print_sph_summary(const SphRunSummary& s, const std::string& name, int dim) {
+void print_sph_summary(const scene::SphRunSummary& s, const std::string& name, int dim) {
   const auto sec = [&](const char* phase) {
     const auto it = s.seconds.find(phase);
     return it == s.seconds.end() ? 0.0 : it->second;
@@ -313,7 +322,8 @@ void print_sph_summary(const SphRunSummary& s, const std::string& name, int dim)
   fmt::print("\n  wall time {:.2f} s\n", s.wall);
 }
 
-void write_sph_json(const std::string& path, const SphRunSummary& s, const std::string& name, int dim) {
+void write_sph_json(const std::string& path, const scene::SphRunSummary& s, const std::string& name,
+                    int dim) {
   std::string phases, levels;
   for (const auto& [phase, t] : s.seconds)
     phases += fmt::format("{}\"{}\": {:.6g}", phases.empty() ? "" : ", ", phase, t);
@@ -335,8 +345,8 @@ void write_sph_json(const std::string& path, const SphRunSummary& s, const std::
           s.rested, s.spacing, s.sound_speed, s.wall, phases));
 }
 
-RunSettings settings_of(const Args& a, const std::string& scene_path) {
-  RunSettings settings;
+scene::RunSettings settings_of(const Args& a, const std::string& scene_path) {
+  scene::RunSettings settings;
   settings.out = a.out;
   settings.frames = !a.no_frames;
   settings.checkpoint_every = a.checkpoint_every;
@@ -363,23 +373,24 @@ void run_to_end(Runner& run, const Args& a) {
 }
 
 template <int Dim>
-int run_sph(const Args& a, const std::string& scene_path, Scene<Dim>* loaded) {
-  const RunSettings settings = settings_of(a, scene_path);
-  std::unique_ptr<SphSceneRunner<Dim>> run;
+int run_sph(const Args& a, const std::string& scene_path, scene::Scene<Dim>* loaded) {
+  const scene::RunSettings settings = settings_of(a, scene_path);
+  std::unique_ptr<scene::SphSceneRunner<Dim>> run;
   if (!a.resume.empty()) {
-    run = std::make_unique<SphSceneRunner<Dim>>(SphSceneRunner<Dim>::resume(a.resume, settings));
+    run =
+        std::make_unique<scene::SphSceneRunner<Dim>>(scene::SphSceneRunner<Dim>::resume(a.resume, settings));
     echo_sph<Dim>(run->scene(), settings, true);
     fmt::print("  continuing from step {} (t = {:.6g} s)\n", run->solver().steps(), run->solver().time());
   } else {
     echo_sph<Dim>(*loaded, settings, false);
     try {
-      run = std::make_unique<SphSceneRunner<Dim>>(std::move(*loaded), settings);
+      run = std::make_unique<scene::SphSceneRunner<Dim>>(std::move(*loaded), settings);
     } catch (const Error& e) {
       throw RunFailure{fmt::format("seeding failed: {}", e.what())};
     }
   }
   run_to_end(*run, a);
-  const SphRunSummary s = run->summary();
+  const scene::SphRunSummary s = run->summary();
   print_sph_summary(s, run->scene().name, Dim);
   if (!a.json.empty()) write_sph_json(a.json, s, run->scene().name, Dim);
   if (!a.out.empty()) fmt::print("  frames: {} in {}/{}.xmf\n", run->n_frames(), a.out, run->scene().name);
@@ -388,18 +399,18 @@ int run_sph(const Args& a, const std::string& scene_path, Scene<Dim>* loaded) {
 
 template <int Dim>
 int run_scene(const Args& a, const std::string& scene_path) {
-  const RunSettings settings = settings_of(a, scene_path);
-  std::unique_ptr<SceneRunner<Dim>> run;
+  const scene::RunSettings settings = settings_of(a, scene_path);
+  std::unique_ptr<scene::SceneRunner<Dim>> run;
   if (!a.resume.empty()) {
-    if (checkpoint_is_sph(a.resume)) return run_sph<Dim>(a, scene_path, nullptr);
-    run = std::make_unique<SceneRunner<Dim>>(SceneRunner<Dim>::resume(a.resume, settings));
+    if (scene::checkpoint_is_sph(a.resume)) return run_sph<Dim>(a, scene_path, nullptr);
+    run = std::make_unique<scene::SceneRunner<Dim>>(scene::SceneRunner<Dim>::resume(a.resume, settings));
   } else {
-    Scene<Dim> scene = load_scene<Dim>(scene_path);
-    apply_overrides<Dim>(a.overrides, scene);
+    scene::Scene<Dim> scene = scene::load_scene<Dim>(scene_path);
+    scene::apply_overrides<Dim>(a.overrides, scene);
     if (scene.sph) return run_sph<Dim>(a, scene_path, &scene);
     echo<Dim>(scene, settings, false);
     try {
-      run = std::make_unique<SceneRunner<Dim>>(std::move(scene), settings);
+      run = std::make_unique<scene::SceneRunner<Dim>>(std::move(scene), settings);
     } catch (const Error& e) {
       throw RunFailure{fmt::format("seeding failed: {}", e.what())};
     }
@@ -409,7 +420,7 @@ int run_scene(const Args& a, const std::string& scene_path) {
     fmt::print("  continuing from step {} (t = {:.6g} s)\n", run->solver().steps(), run->solver().time());
   }
   run_to_end(*run, a);
-  const RunSummary s = run->summary();
+  const scene::RunSummary s = run->summary();
   print_summary(s, run->scene().name, Dim);
   if (!a.json.empty()) write_json(a.json, s, run->scene().name, Dim);
   if (!a.out.empty()) fmt::print("  frames: {} in {}/{}.xmf\n", run->n_frames(), a.out, run->scene().name);
@@ -419,7 +430,7 @@ int run_scene(const Args& a, const std::string& scene_path) {
 /// One Markdown row of a built-in scene, read from its file.
 template <int Dim>
 void print_scene_row(const std::string& name, const std::string& path) {
-  const Scene<Dim> s = load_scene<Dim>(path);
+  const scene::Scene<Dim> s = scene::load_scene<Dim>(path);
   const std::string grid =
       s.sph ? std::string("particles") : fmt::format("{} / {}", s.pic.coarse_level, s.pic.finest_level);
   const std::string length =
@@ -436,9 +447,9 @@ void print_scene_table() {
   fmt::print(
       "| scene | dim | method | paper figure | what it shows | levels (coarse / finest) | simulated |\n");
   fmt::print("| --- | --- | --- | --- | --- | --- | --- |\n");
-  for (const auto& [name, description] : builtin_scenes()) {
-    const std::string path = find_scene(name);
-    if (scene_dimension(path) == 2)
+  for (const auto& [name, description] : scene::builtin_scenes()) {
+    const std::string path = scene::find_scene(name);
+    if (scene::scene_dimension(path) == 2)
       print_scene_row<2>(name, path);
     else
       print_scene_row<3>(name, path);
@@ -511,7 +522,8 @@ int main(int argc, char** argv) {
         print_scene_table();
         return 0;
       }
-      for (const auto& [name, description] : builtin_scenes()) fmt::print("{:<26} {}\n", name, description);
+      for (const auto& [name, description] : scene::builtin_scenes())
+        fmt::print("{:<26} {}\n", name, description);
       return 0;
     }
     if (a.regular) a.overrides.adaptive = 0;
@@ -533,10 +545,10 @@ int main(int argc, char** argv) {
     int dim = 0;
     std::string path;
     if (a.resume.empty()) {
-      path = find_scene(a.scene);
-      dim = scene_dimension(path);
+      path = scene::find_scene(a.scene);
+      dim = scene::scene_dimension(path);
     } else {
-      dim = static_cast<int>(checkpoint_dimension(a.resume));
+      dim = static_cast<int>(scene::checkpoint_dimension(a.resume));
     }
     return dim == 2 ? run_scene<2>(a, path) : run_scene<3>(a, path);
   } catch (const RunFailure& f) {

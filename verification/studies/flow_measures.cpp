@@ -5,13 +5,13 @@
 namespace liquid::verification {
 
 template <int Dim>
-std::vector<double> particle_volumes(const CellGraph<Dim>& graph, std::span<const Vec<Dim>> x, double volume,
-                                     double* filled) {
-  std::vector<CellId> cell(x.size());
+std::vector<double> particle_volumes(const tree::CellGraph<Dim>& graph, std::span<const Vec<Dim>> x,
+                                     double volume, double* filled) {
+  std::vector<tree::CellId> cell(x.size());
   std::vector<int> count(graph.cell_capacity(), 0);
-  CellId hint = no_cell;
+  tree::CellId hint = tree::no_cell;
   for (std::size_t i = 0; i < x.size(); ++i) {
-    hint = hint == no_cell ? graph.locate(x[i]) : graph.locate(x[i], hint);
+    hint = hint == tree::no_cell ? graph.locate(x[i]) : graph.locate(x[i], hint);
     cell[i] = hint;
     ++count[hint];
   }
@@ -29,29 +29,29 @@ std::vector<double> particle_volumes(const CellGraph<Dim>& graph, std::span<cons
 }
 
 template <int Dim>
-double affine_energy(const AdaptivePic<Dim>& sim, std::span<const double> w) {
-  const Particles<Dim>& p = sim.particles();
+double affine_energy(const pic::AdaptivePic<Dim>& sim, std::span<const double> w) {
+  const particles::Particles<Dim>& p = sim.particles();
   const int c = p.find_field("apic");
-  if (sim.options().transfer != PicTransfer::apic || c < 0) return 0.0;
-  return particle_affine_energy<Dim>(RegularLattice<Dim>(sim.graph()), p, p.field(c), w);
+  if (sim.options().transfer != pic::PicTransfer::apic || c < 0) return 0.0;
+  return transfer::particle_affine_energy<Dim>(transfer::RegularLattice<Dim>(sim.graph()), p, p.field(c), w);
 }
 
 template <int Dim>
-double twice_kinetic_energy(const AdaptivePic<Dim>& sim, double volume) {
-  const Particles<Dim>& p = sim.particles();
+double twice_kinetic_energy(const pic::AdaptivePic<Dim>& sim, double volume) {
+  const particles::Particles<Dim>& p = sim.particles();
   const std::vector<double> w = particle_volumes<Dim>(sim.graph(), p.x, volume);
   double sum = 0.0;
   for (int i = 0; i < p.size(); ++i) sum += w[i] * p.v[i].squaredNorm();
   return sum + 2.0 * affine_energy<Dim>(sim, w);
 }
 
-template std::vector<double> particle_volumes<2>(const CellGraph<2>&, std::span<const Vec<2>>, double,
+template std::vector<double> particle_volumes<2>(const tree::CellGraph<2>&, std::span<const Vec<2>>, double,
                                                  double*);
-template std::vector<double> particle_volumes<3>(const CellGraph<3>&, std::span<const Vec<3>>, double,
+template std::vector<double> particle_volumes<3>(const tree::CellGraph<3>&, std::span<const Vec<3>>, double,
                                                  double*);
-template double affine_energy<2>(const AdaptivePic<2>&, std::span<const double>);
-template double affine_energy<3>(const AdaptivePic<3>&, std::span<const double>);
-template double twice_kinetic_energy<2>(const AdaptivePic<2>&, double);
-template double twice_kinetic_energy<3>(const AdaptivePic<3>&, double);
+template double affine_energy<2>(const pic::AdaptivePic<2>&, std::span<const double>);
+template double affine_energy<3>(const pic::AdaptivePic<3>&, std::span<const double>);
+template double twice_kinetic_energy<2>(const pic::AdaptivePic<2>&, double);
+template double twice_kinetic_energy<3>(const pic::AdaptivePic<3>&, double);
 
 }  // namespace liquid::verification

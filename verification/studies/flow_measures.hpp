@@ -15,23 +15,25 @@ namespace liquid::verification {
 struct FlowMethod {
   const char* name;
   bool adaptive;
-  PicTransfer transfer;
+  pic::PicTransfer transfer;
   bool paper = false;
 };
 /// The flow studies' methods, side by side: adaptive RBF with the default transfer and reseeding,
 /// the same with the paper's preset, RBF on the uniform tree, and the regular baselines PIC, FLIP and
 /// APIC.
-inline const FlowMethod kFlowMethods[] = {
-    {"adaptive-rbf", true, PicTransfer::rbf},   {"adaptive-rbf-paper", true, PicTransfer::rbf, true},
-    {"regular-rbf", false, PicTransfer::rbf},   {"regular-pic", false, PicTransfer::pic},
-    {"regular-flip", false, PicTransfer::flip}, {"regular-apic", false, PicTransfer::apic}};
+inline const FlowMethod kFlowMethods[] = {{"adaptive-rbf", true, pic::PicTransfer::rbf},
+                                          {"adaptive-rbf-paper", true, pic::PicTransfer::rbf, true},
+                                          {"regular-rbf", false, pic::PicTransfer::rbf},
+                                          {"regular-pic", false, pic::PicTransfer::pic},
+                                          {"regular-flip", false, pic::PicTransfer::flip},
+                                          {"regular-apic", false, pic::PicTransfer::apic}};
 
 /// How often a run's projections raised the kinetic energy of the face velocities
 /// (PicStepReport::grid_energy_before/after), and by how much at most (relative).
 struct ProjectionEnergy {
   long raised = 0;       ///< steps whose projection raised it by more than 1e-9
   double largest = 0.0;  ///< the largest relative rise
-  void add(const PicStepReport& r) {
+  void add(const pic::PicStepReport& r) {
     if (r.grid_energy_before <= 0.0) return;
     const double rise = r.grid_energy_after / r.grid_energy_before - 1.0;
     raised += rise > 1e-9;
@@ -49,17 +51,17 @@ struct ProjectionEnergy {
 /// volume times min(its particles, 2^Dim) / 2^Dim. A PIC liquid that spreads (its particles leaving
 /// gaps that the cells still count as liquid) grows by this measure.
 template <int Dim>
-std::vector<double> particle_volumes(const CellGraph<Dim>& graph, std::span<const Vec<Dim>> x, double volume,
-                                     double* filled = nullptr);
+std::vector<double> particle_volumes(const tree::CellGraph<Dim>& graph, std::span<const Vec<Dim>> x,
+                                     double volume, double* filled = nullptr);
 /// APIC's affine kinetic energy (particle_affine_energy), each particle weighing w_i; 0 for the
 /// other transfers, whose particles carry no affine part.
 template <int Dim>
-double affine_energy(const AdaptivePic<Dim>& sim, std::span<const double> w);
+double affine_energy(const pic::AdaptivePic<Dim>& sim, std::span<const double> w);
 
 /// Twice the kinetic energy of a box of volume `volume` full of liquid, from the particles (each
 /// weighing its share, particle_volumes), APIC's affine part included.
 template <int Dim>
-double twice_kinetic_energy(const AdaptivePic<Dim>& sim, double volume);
+double twice_kinetic_energy(const pic::AdaptivePic<Dim>& sim, double volume);
 
 /// The Taylor-Green cells u = (sin x cos y, -cos x sin y) on [0, pi]^2, an exact steady inviscid
 /// flow with free-slip walls; in 3D the same cells with w = 0 (independent of z).

@@ -16,7 +16,7 @@ PoissonStudy<Dim> neumann_study(bool full) {
   s.use(support::cosine_product<Dim>());
   const auto circle = levelset::sphere<Dim>(Vec<Dim>::Constant(0.5 * std::numbers::pi), 0.9);
   const Box<Dim> domain = s.domain;
-  s.make_tree = [domain, circle](int level, const CellGraphOptions<Dim>& options) {
+  s.make_tree = [domain, circle](int level, const tree::CellGraphOptions<Dim>& options) {
     return tree::narrow_band<Dim>(domain, circle, level, level + 2, 2.0, options);
   };
   s.rows = RowProtocol::refine;
@@ -44,7 +44,7 @@ PoissonStudy<Dim> dirichlet_study(bool full) {
   const auto p = s.exact;
   const auto grad = s.gradient;
   const auto distance = [p, grad](const Vec<Dim>& x) { return p(x) / std::max(grad(x).norm(), 1e-12); };
-  s.make_tree = [domain, distance](int level, const CellGraphOptions<Dim>& options) {
+  s.make_tree = [domain, distance](int level, const tree::CellGraphOptions<Dim>& options) {
     return tree::narrow_band<Dim>(domain, distance, level, level + 2, 2.0, options);
   };
   s.rows = RowProtocol::refine;

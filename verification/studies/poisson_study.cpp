@@ -23,8 +23,8 @@ std::string format_point(const Vec<Dim>& x) {
 }
 
 template <int Dim>
-std::string describe_cell(const CellGraph<Dim>& graph, const PoissonStudy<Dim>& study, CellId c) {
-  if (c == no_cell) return {};
+std::string describe_cell(const tree::CellGraph<Dim>& graph, const PoissonStudy<Dim>& study, tree::CellId c) {
+  if (c == tree::no_cell) return {};
   std::string s =
       fmt::format("cell {} at {}, level {}", c, format_point<Dim>(graph.centre(c)), graph.level(c));
   if (study.levelset) s += fmt::format(", phi {:.3g}", study.levelset(graph.centre(c)));
@@ -34,8 +34,8 @@ std::string describe_cell(const CellGraph<Dim>& graph, const PoissonStudy<Dim>& 
 }  // namespace
 
 template <int Dim>
-CellGraph<Dim> row_tree(const PoissonStudy<Dim>& study, const CellGraph<Dim>& first, int level,
-                        const CellGraphOptions<Dim>& options) {
+tree::CellGraph<Dim> row_tree(const PoissonStudy<Dim>& study, const tree::CellGraph<Dim>& first, int level,
+                              const tree::CellGraphOptions<Dim>& options) {
   if (study.rows == RowProtocol::rebuild) return study.make_tree(level, options);
   return tree::refined<Dim>(first, level - study.level_min, options);
 }
@@ -61,7 +61,7 @@ mac::PoissonProblem<Dim> poisson_problem(const PoissonStudy<Dim>& study) {
 /// For a zero-mean (bordered) system, the volume-weighted mean of x - p over the unknowns: the
 /// constant an error is measured after removing. 0 for the others.
 template <int Dim>
-double mean_shift(const CellGraph<Dim>& graph, const PoissonStudy<Dim>& study,
+double mean_shift(const tree::CellGraph<Dim>& graph, const PoissonStudy<Dim>& study,
                   const mac::PoissonSystem<Dim>& system, const linalg::Vector& x) {
   if (!system.bordered) return 0.0;
   const auto& cells = system.layout.cell_of_dof;
@@ -74,7 +74,7 @@ double mean_shift(const CellGraph<Dim>& graph, const PoissonStudy<Dim>& study,
 }
 
 template <int Dim>
-double max_error(const CellGraph<Dim>& graph, const PoissonStudy<Dim>& study,
+double max_error(const tree::CellGraph<Dim>& graph, const PoissonStudy<Dim>& study,
                  const mac::PoissonSystem<Dim>& system, const linalg::Vector& x) {
   const auto& cells = system.layout.cell_of_dof;
   const double shift = mean_shift<Dim>(graph, study, system, x);
@@ -85,7 +85,7 @@ double max_error(const CellGraph<Dim>& graph, const PoissonStudy<Dim>& study,
 }
 
 template <int Dim>
-PoissonRun solve_poisson(const CellGraph<Dim>& graph, const PoissonStudy<Dim>& study) {
+PoissonRun solve_poisson(const tree::CellGraph<Dim>& graph, const PoissonStudy<Dim>& study) {
   const mac::PoissonSystem<Dim> system =
       mac::assemble_poisson<Dim>(graph, poisson_problem<Dim>(study), study.discretisation);
 
@@ -102,10 +102,10 @@ PoissonRun solve_poisson(const CellGraph<Dim>& graph, const PoissonStudy<Dim>& s
   // L-inf of p over the unknowns (minus the volume-weighted mean difference for zero-mean systems).
   const auto& cells = system.layout.cell_of_dof;
   const double shift = mean_shift<Dim>(graph, study, system, x);
-  CellId worst_cell = no_cell;
+  tree::CellId worst_cell = tree::no_cell;
   for (std::size_t i = 0; i < cells.size(); ++i) {
     const double e = std::abs(x[i] - shift - study.exact(graph.centre(cells[i])));
-    if (e > run.err_p || worst_cell == no_cell) run.err_p = e, worst_cell = cells[i];
+    if (e > run.err_p || worst_cell == tree::no_cell) run.err_p = e, worst_cell = cells[i];
   }
   run.worst_p = describe_cell(graph, study, worst_cell);
   std::vector<std::pair<long, double>> by_level;
@@ -120,17 +120,17 @@ PoissonRun solve_poisson(const CellGraph<Dim>& graph, const PoissonStudy<Dim>& s
     if (by_level[l].first > 0) run.err_by_level.emplace_back(l, by_level[l].first, by_level[l].second);
 
   const std::vector<double> dpdn = mac::face_normal_derivative<Dim>(graph, system, study.discretisation, x);
-  FaceId worst_face = no_face;
-  graph.for_each_face([&](FaceId f) {
+  tree::FaceId worst_face = tree::no_face;
+  graph.for_each_face([&](tree::FaceId f) {
     if (std::isnan(dpdn[f])) return;
     const double exact = study.gradient(graph.face_centre(f))[graph.face(f).axis];
     const double e = std::abs(dpdn[f] - exact);
-    if (e > run.err_grad || worst_face == no_face) run.err_grad = e, worst_face = f;
+    if (e > run.err_grad || worst_face == tree::no_face) run.err_grad = e, worst_face = f;
     const auto& g = graph.face(f);
     if (!g.is_boundary())
       run.max_level_jump = std::max(run.max_level_jump, std::abs(g.side_level[0] - g.side_level[1]));
   });
-  if (worst_face != no_face) {
+  if (worst_face != tree::no_face) {
     const auto& g = graph.face(worst_face);
     run.worst_grad =
         fmt::format("face {} at {}, levels {}|{}, {}", worst_face,
@@ -138,7 +138,7 @@ PoissonRun solve_poisson(const CellGraph<Dim>& graph, const PoissonStudy<Dim>& s
                     !g.hanging() && g.side_level[0] == g.side_level[1] ? "two-point FD" : "RBF-FD");
   }
   run.h = graph.cell_size(cells.front()).maxCoeff();
-  graph.for_each_cell([&](CellId c) { run.h = std::min(run.h, graph.cell_size(c).maxCoeff()); });
+  graph.for_each_cell([&](tree::CellId c) { run.h = std::min(run.h, graph.cell_size(c).maxCoeff()); });
   return run;
 }
 
@@ -186,7 +186,7 @@ CaseResult run_poisson_study(PoissonStudy<Dim> study, const CaseOptions& options
   study.max_cells = options.max_cells;
 
   CaseResult result;
-  CellGraphOptions<Dim> tree_options;
+  tree::CellGraphOptions<Dim> tree_options;
   tree_options.max_jump = study.max_jump;
   Table adaptive("adaptive tree (FD where regular, RBF-FD at T-junctions)",
                  {"level", "h", "unknowns", "rbf rows", "jump", "err p", "order p", "err dp/dn",
@@ -237,7 +237,7 @@ CaseResult run_poisson_study(PoissonStudy<Dim> study, const CaseOptions& options
     if (study.max_cells > 0 &&
         budget_cost<Dim>(std::ldexp(1.0, Dim * fine), std::ldexp(1.0, Dim * fine)) > double(study.max_cells))
       return;
-    const CellGraph<Dim> flat = tree::uniform<Dim>(study.domain, fine, tree_options);
+    const tree::CellGraph<Dim> flat = tree::uniform<Dim>(study.domain, fine, tree_options);
     const PoissonRun u = solve_poisson<Dim>(flat, study);
     if (!u.solve.converged()) return;
     uh.push_back(u.h), uep.push_back(u.err_p), ueg.push_back(u.err_grad);
@@ -327,14 +327,14 @@ template <int Dim>
 std::vector<PoissonRun> solve_rows(const PoissonStudy<Dim>& study, CaseResult& result,
                                    const std::string& label,
                                    const std::function<void(int, const PoissonRun&)>& on_row) {
-  CellGraphOptions<Dim> options;
+  tree::CellGraphOptions<Dim> options;
   options.max_jump = study.max_jump;
-  const CellGraph<Dim> first = study.make_tree(study.level_min, options);
+  const tree::CellGraph<Dim> first = study.make_tree(study.level_min, options);
   const std::string prefix = label.empty() ? "" : label + " ";
   std::vector<PoissonRun> runs;
   for (int level = study.level_min; level <= study.level_max; ++level) {
     // The first row solves `first` itself: no second build, no copy.
-    std::optional<CellGraph<Dim>> later;
+    std::optional<tree::CellGraph<Dim>> later;
     if (level > study.level_min) later.emplace(row_tree<Dim>(study, first, level, options));
     PoissonRun run = solve_poisson<Dim>(later ? *later : first, study);
     if (level == study.level_min && study.max_cells > 0) {
@@ -362,20 +362,20 @@ std::vector<PoissonRun> solve_rows(const PoissonStudy<Dim>& study, CaseResult& r
 
 template mac::PoissonProblem<2> poisson_problem<2>(const PoissonStudy<2>&);
 template mac::PoissonProblem<3> poisson_problem<3>(const PoissonStudy<3>&);
-template double max_error<2>(const CellGraph<2>&, const PoissonStudy<2>&, const mac::PoissonSystem<2>&,
+template double max_error<2>(const tree::CellGraph<2>&, const PoissonStudy<2>&, const mac::PoissonSystem<2>&,
                              const linalg::Vector&);
-template double max_error<3>(const CellGraph<3>&, const PoissonStudy<3>&, const mac::PoissonSystem<3>&,
+template double max_error<3>(const tree::CellGraph<3>&, const PoissonStudy<3>&, const mac::PoissonSystem<3>&,
                              const linalg::Vector&);
 template std::vector<PoissonRun> solve_rows<2>(const PoissonStudy<2>&, CaseResult&, const std::string&,
                                                const std::function<void(int, const PoissonRun&)>&);
 template std::vector<PoissonRun> solve_rows<3>(const PoissonStudy<3>&, CaseResult&, const std::string&,
                                                const std::function<void(int, const PoissonRun&)>&);
-template CellGraph<2> row_tree<2>(const PoissonStudy<2>&, const CellGraph<2>&, int,
-                                  const CellGraphOptions<2>&);
-template CellGraph<3> row_tree<3>(const PoissonStudy<3>&, const CellGraph<3>&, int,
-                                  const CellGraphOptions<3>&);
-template PoissonRun solve_poisson<2>(const CellGraph<2>&, const PoissonStudy<2>&);
-template PoissonRun solve_poisson<3>(const CellGraph<3>&, const PoissonStudy<3>&);
+template tree::CellGraph<2> row_tree<2>(const PoissonStudy<2>&, const tree::CellGraph<2>&, int,
+                                        const tree::CellGraphOptions<2>&);
+template tree::CellGraph<3> row_tree<3>(const PoissonStudy<3>&, const tree::CellGraph<3>&, int,
+                                        const tree::CellGraphOptions<3>&);
+template PoissonRun solve_poisson<2>(const tree::CellGraph<2>&, const PoissonStudy<2>&);
+template PoissonRun solve_poisson<3>(const tree::CellGraph<3>&, const PoissonStudy<3>&);
 template CaseResult run_poisson_study<2>(PoissonStudy<2>, const CaseOptions&);
 template CaseResult run_poisson_study<3>(PoissonStudy<3>, const CaseOptions&);
 

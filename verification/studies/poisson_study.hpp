@@ -31,7 +31,7 @@ struct PoissonStudy {
   levelset::Function<Dim> levelset;                   ///< empty: Neumann walls
   bool dirichlet_walls = false;                       ///< walls carry p (else Neumann)
   /// The adaptive tree of one row, by its base level.
-  std::function<CellGraph<Dim>(int level, const CellGraphOptions<Dim>& options)> make_tree;
+  std::function<tree::CellGraph<Dim>(int level, const tree::CellGraphOptions<Dim>& options)> make_tree;
   /// rebuild: make_tree per row, so band widths counted in finest cells halve with h.
   /// refine: only the first row calls make_tree; every later row is that tree with each leaf split
   /// once more (the paper's recursive subdivision), so the refined regions and the T-junctions stay
@@ -67,8 +67,8 @@ CaseResult run_poisson_study(PoissonStudy<Dim> study, const CaseOptions& options
 /// The tree of the row at base level `level`; `first` is make_tree(level_min) (used when the study
 /// refines its first row).
 template <int Dim>
-CellGraph<Dim> row_tree(const PoissonStudy<Dim>& study, const CellGraph<Dim>& first, int level,
-                        const CellGraphOptions<Dim>& options);
+tree::CellGraph<Dim> row_tree(const PoissonStudy<Dim>& study, const tree::CellGraph<Dim>& first, int level,
+                              const tree::CellGraphOptions<Dim>& options);
 
 /// One solve and its errors (also used by the unit tests and the hard cases).
 struct PoissonRun {
@@ -95,7 +95,7 @@ std::vector<PoissonRun> solve_rows(const PoissonStudy<Dim>& study, CaseResult& r
                                    const std::function<void(int, const PoissonRun&)>& on_row = {});
 
 template <int Dim>
-PoissonRun solve_poisson(const CellGraph<Dim>& graph, const PoissonStudy<Dim>& study);
+PoissonRun solve_poisson(const tree::CellGraph<Dim>& graph, const PoissonStudy<Dim>& study);
 
 /// The mac problem of a study: f, the interface and its values, the walls, the pin.
 template <int Dim>
@@ -104,7 +104,7 @@ mac::PoissonProblem<Dim> poisson_problem(const PoissonStudy<Dim>& study);
 /// L-inf error of p over the unknowns of `system` for the solution x (the volume-weighted mean
 /// difference removed for zero-mean systems).
 template <int Dim>
-double max_error(const CellGraph<Dim>& graph, const PoissonStudy<Dim>& study,
+double max_error(const tree::CellGraph<Dim>& graph, const PoissonStudy<Dim>& study,
                  const mac::PoissonSystem<Dim>& system, const linalg::Vector& x);
 
 }  // namespace liquid::verification

@@ -29,7 +29,7 @@ int main(int argc, char** argv) {
     LIQUID_VERIFY(level >= 3 && level <= 10, "level {} is outside [3, 10]", level);
     const Box<2> domain{Vec<2>(-1.0, -1.0), Vec<2>(1.0, 1.0)};
     const auto circle = levelset::sphere<2>(Vec<2>::Zero(), 0.8);
-    const CellGraph<2> graph = tree::narrow_band<2>(domain, circle, level - 3, level, 2.0);
+    const tree::CellGraph<2> graph = tree::narrow_band<2>(domain, circle, level - 3, level, 2.0);
     mac::PoissonProblem<2> problem;
     const auto exact = [](const Vec<2>& x) { return std::exp(x[0]) * std::sin(2.0 * x[1]); };
     problem.f = [&](const Vec<2>& x) { return -3.0 * exact(x); };

@@ -9,7 +9,7 @@
 #include "liquid/core/error.hpp"
 #include "liquid/io/hdf5_detail.hpp"
 
-namespace liquid::detail {
+namespace liquid::io::detail {
 
 /// The open HDF5 file of an archive writer or reader.
 class ArchiveFile {
@@ -23,7 +23,7 @@ class ArchiveFile {
   hid_t id;
 };
 
-}  // namespace liquid::detail
+}  // namespace liquid::io::detail
 
 namespace liquid::io {
 

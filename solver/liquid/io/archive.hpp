@@ -19,9 +19,9 @@
 #include <string>
 #include <vector>
 
-namespace liquid::detail {
+namespace liquid::io::detail {
 class ArchiveFile;  // the open HDF5 file (archive.cpp)
-}  // namespace liquid::detail
+}  // namespace liquid::io::detail
 
 namespace liquid::io {
 

@@ -14,7 +14,7 @@
 
 #include "liquid/core/error.hpp"
 
-namespace liquid::detail {
+namespace liquid::io::detail {
 
 /// Silences HDF5's own error printing while alive (our checks report failures), then restores it.
 class QuietHdf5 {
@@ -118,4 +118,4 @@ inline void rename_file(const std::string& from, const std::string& to, std::str
   LIQUID_VERIFY(!ec, "{}: cannot rename {} to {}: {}", who, from, to, ec.message());
 }
 
-}  // namespace liquid::detail
+}  // namespace liquid::io::detail

@@ -38,7 +38,7 @@ int corner_bit(int k, int d) {
 }  // namespace
 
 template <int Dim>
-TreeFiles write_tree(const std::string& stem, const CellGraph<Dim>& graph,
+TreeFiles write_tree(const std::string& stem, const tree::CellGraph<Dim>& graph,
                      std::span<const CellField> fields) {
   constexpr int n_corners = 1 << Dim;
   for (const CellField& f : fields) {
@@ -52,13 +52,13 @@ TreeFiles write_tree(const std::string& stem, const CellGraph<Dim>& graph,
                   f.values.size(), graph.cell_capacity() - 1);
   }
   TreeFiles files{stem + ".h5", stem + ".xmf", ""};
-  const std::vector<CellId> ids = graph.cell_ids();
+  const std::vector<tree::CellId> ids = graph.cell_ids();
   const auto n = static_cast<hsize_t>(ids.size());
 
   std::vector<double> geometry(n * n_corners * Dim);
   std::vector<std::int64_t> topology(n * n_corners);
   std::vector<std::int32_t> level(n), cell_id(n);
-#pragma omp parallel for schedule(static) if (static_cast <long>(n) > detail::parallel_min)
+#pragma omp parallel for schedule(static) if (static_cast <long>(n) > tree::detail::parallel_min)
   for (long i = 0; i < static_cast<long>(n); ++i) {
     const Box<Dim> b = graph.box(ids[i]);
     for (int k = 0; k < n_corners; ++k) {
@@ -121,7 +121,7 @@ TreeFiles write_tree(const std::string& stem, const CellGraph<Dim>& graph,
   return files;
 }
 
-template TreeFiles write_tree<2>(const std::string&, const CellGraph<2>&, std::span<const CellField>);
-template TreeFiles write_tree<3>(const std::string&, const CellGraph<3>&, std::span<const CellField>);
+template TreeFiles write_tree<2>(const std::string&, const tree::CellGraph<2>&, std::span<const CellField>);
+template TreeFiles write_tree<3>(const std::string&, const tree::CellGraph<3>&, std::span<const CellField>);
 
 }  // namespace liquid::io

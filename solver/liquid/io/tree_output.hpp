@@ -39,7 +39,7 @@ struct TreeFiles {
 /// Writes STEM.h5 and STEM.xmf for `graph` with `fields`. `stem` is a path without extension;
 /// its folder must exist. Throws liquid::Error naming the file on any failure.
 template <int Dim>
-TreeFiles write_tree(const std::string& stem, const CellGraph<Dim>& graph,
+TreeFiles write_tree(const std::string& stem, const tree::CellGraph<Dim>& graph,
                      std::span<const CellField> fields = {});
 
 }  // namespace liquid::io

@@ -13,17 +13,17 @@
 namespace liquid::mac {
 
 template <int Dim>
-std::vector<double> fv_divergence(const CellGraph<Dim>& graph, const std::vector<double>& u) {
+std::vector<double> fv_divergence(const tree::CellGraph<Dim>& graph, const std::vector<double>& u) {
   LIQUID_VERIFY(static_cast<int>(u.size()) >= graph.face_capacity(),
                 "fv_divergence: {} face values for {} faces", u.size(), graph.face_capacity());
   std::vector<double> div(graph.cell_capacity(), std::numeric_limits<double>::quiet_NaN());
-  const std::vector<CellId> cells = graph.cell_ids();
+  const std::vector<tree::CellId> cells = graph.cell_ids();
 #pragma omp parallel for schedule(static) if (cells.size() > 8192)
   for (std::size_t i = 0; i < cells.size(); ++i) {
-    const CellId c = cells[i];
+    const tree::CellId c = cells[i];
     double flux = 0.0;
-    for (FaceId f : graph.faces(c)) {
-      const GraphFace& g = graph.face(f);
+    for (tree::FaceId f : graph.faces(c)) {
+      const tree::GraphFace& g = graph.face(f);
       const double sign = g.cell[0] == c ? 1.0 : -1.0;  // c below the face: outward normal is +axis
       flux += sign * u[f] * graph.face_area(f);
     }
@@ -33,23 +33,23 @@ std::vector<double> fv_divergence(const CellGraph<Dim>& graph, const std::vector
 }
 
 template <int Dim>
-std::vector<double> rbf_divergence(const CellGraph<Dim>& graph, const std::vector<double>& u,
+std::vector<double> rbf_divergence(const tree::CellGraph<Dim>& graph, const std::vector<double>& u,
                                    const rbf::Config& config, double growth) {
   LIQUID_VERIFY(static_cast<int>(u.size()) >= graph.face_capacity(),
                 "rbf_divergence: {} face values for {} faces", u.size(), graph.face_capacity());
   std::vector<double> div(graph.cell_capacity(), std::numeric_limits<double>::quiet_NaN());
-  const std::vector<CellId> cells = graph.cell_ids();
+  const std::vector<tree::CellId> cells = graph.cell_ids();
   const std::size_t n_target = stencil_size(Dim, config.degree, growth);
   struct Scratch {
-    std::vector<CellId> ring;
-    std::vector<FaceId> faces;
+    std::vector<tree::CellId> ring;
+    std::vector<tree::FaceId> faces;
     std::vector<Vec<Dim>> nodes;
     std::vector<double> w;
   };
   parallel_for(
       static_cast<long>(cells.size()), [] { return Scratch{}; },
       [&](Scratch& s, long i) {
-        const CellId c = cells[i];
+        const tree::CellId c = cells[i];
         const Vec<Dim> x = graph.centre(c);
         double sum = 0.0;
         for (int k = 0; k < Dim; ++k) {
@@ -60,19 +60,19 @@ std::vector<double> rbf_divergence(const CellGraph<Dim>& graph, const std::vecto
           for (int rings = 1; rings <= 3; ++rings, n_keep += n_target / 2) {
             graph.k_ring(c, rings, s.ring);
             s.faces.clear();
-            for (CellId r : s.ring)
-              for (FaceId f : graph.faces(r))
+            for (tree::CellId r : s.ring)
+              for (tree::FaceId f : graph.faces(r))
                 if (graph.face(f).axis == k) s.faces.push_back(f);
             std::sort(s.faces.begin(), s.faces.end());
             s.faces.erase(std::unique(s.faces.begin(), s.faces.end()), s.faces.end());
-            std::sort(s.faces.begin(), s.faces.end(), [&](FaceId a, FaceId b) {
+            std::sort(s.faces.begin(), s.faces.end(), [&](tree::FaceId a, tree::FaceId b) {
               const double da = (graph.face_centre(a) - x).squaredNorm(),
                            db = (graph.face_centre(b) - x).squaredNorm();
               return da != db ? da < db : a < b;
             });
             if (s.faces.size() > n_keep) s.faces.resize(n_keep);
             s.nodes.clear();
-            for (FaceId f : s.faces) s.nodes.push_back(graph.face_centre(f));
+            for (tree::FaceId f : s.faces) s.nodes.push_back(graph.face_centre(f));
             st = rbf::weights<Dim>(s.nodes, x, rbf::Operator<Dim>::partial(k), config, s.w);
             if (st.info == rbf::Info::ok) break;
           }
@@ -86,11 +86,11 @@ std::vector<double> rbf_divergence(const CellGraph<Dim>& graph, const std::vecto
   return div;
 }
 
-template std::vector<double> fv_divergence<2>(const CellGraph<2>&, const std::vector<double>&);
-template std::vector<double> fv_divergence<3>(const CellGraph<3>&, const std::vector<double>&);
-template std::vector<double> rbf_divergence<2>(const CellGraph<2>&, const std::vector<double>&,
+template std::vector<double> fv_divergence<2>(const tree::CellGraph<2>&, const std::vector<double>&);
+template std::vector<double> fv_divergence<3>(const tree::CellGraph<3>&, const std::vector<double>&);
+template std::vector<double> rbf_divergence<2>(const tree::CellGraph<2>&, const std::vector<double>&,
                                                const rbf::Config&, double);
-template std::vector<double> rbf_divergence<3>(const CellGraph<3>&, const std::vector<double>&,
+template std::vector<double> rbf_divergence<3>(const tree::CellGraph<3>&, const std::vector<double>&,
                                                const rbf::Config&, double);
 
 }  // namespace liquid::mac

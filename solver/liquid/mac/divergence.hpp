@@ -16,11 +16,11 @@ namespace liquid::mac {
 /// u: normal velocity per face id (along the face's axis, positive towards the upper side).
 /// Returns the divergence per cell id (NaN for dead ids).
 template <int Dim>
-std::vector<double> fv_divergence(const CellGraph<Dim>& graph, const std::vector<double>& u);
+std::vector<double> fv_divergence(const tree::CellGraph<Dim>& graph, const std::vector<double>& u);
 
 /// The RBF-FD divergence; throws liquid::Error naming the cell when a stencil has no usable weights.
 template <int Dim>
-std::vector<double> rbf_divergence(const CellGraph<Dim>& graph, const std::vector<double>& u,
+std::vector<double> rbf_divergence(const tree::CellGraph<Dim>& graph, const std::vector<double>& u,
                                    const rbf::Config& config = rbf::Config{3, 2}, double growth = 2.0);
 
 }  // namespace liquid::mac

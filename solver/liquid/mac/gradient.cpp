@@ -10,13 +10,13 @@
 namespace liquid::mac {
 
 template <int Dim>
-std::vector<double> face_normal_derivative(const CellGraph<Dim>& graph, const DofLayout<Dim>& layout,
+std::vector<double> face_normal_derivative(const tree::CellGraph<Dim>& graph, const DofLayout<Dim>& layout,
                                            const Boundary<Dim>& boundary, const PoissonOptions& options,
                                            const linalg::Vector& p, rbf::WeightCache<Dim>* shared) {
   LIQUID_VERIFY(p.size() >= layout.n_unknowns(), "face_normal_derivative: {} values for {} unknowns",
                 p.size(), layout.n_unknowns());
   std::vector<double> out(graph.face_capacity(), std::numeric_limits<double>::quiet_NaN());
-  const std::vector<FaceId> faces = graph.face_ids();
+  const std::vector<tree::FaceId> faces = graph.face_ids();
   rbf::Config config = options.rbf;
   config.degree = options.gradient_degree;
   const int n_target = stencil_size(Dim, config.degree, options.growth);
@@ -26,8 +26,8 @@ std::vector<double> face_normal_derivative(const CellGraph<Dim>& graph, const Do
   parallel_for(
       static_cast<long>(faces.size()), [] { return RowScratch<Dim>{}; },
       [&](RowScratch<Dim>& scratch, long q) {
-        const FaceId f = faces[q];
-        const GraphFace& g = graph.face(f);
+        const tree::FaceId f = faces[q];
+        const tree::GraphFace& g = graph.face(f);
         if (g.is_boundary()) return;
         const int ia = layout.dof_of_cell[g.cell[0]], ib = layout.dof_of_cell[g.cell[1]];
         if (ia < 0 && ib < 0) return;
@@ -40,7 +40,7 @@ std::vector<double> face_normal_derivative(const CellGraph<Dim>& graph, const Do
           return;
         }
         const Vec<Dim> at = graph.face_centre(f);
-        const CellId seeds[2] = {g.cell[0], g.cell[1]};
+        const tree::CellId seeds[2] = {g.cell[0], g.cell[1]};
         auto& nodes = scratch.nodes;
         gather_stencil<Dim>(graph, layout, boundary, seeds, at, options.rule, n_target, n_cap, nodes);
         const rbf::Status st =
@@ -58,10 +58,10 @@ std::vector<double> face_normal_derivative(const CellGraph<Dim>& graph, const Do
   return out;
 }
 
-template std::vector<double> face_normal_derivative<2>(const CellGraph<2>&, const DofLayout<2>&,
+template std::vector<double> face_normal_derivative<2>(const tree::CellGraph<2>&, const DofLayout<2>&,
                                                        const Boundary<2>&, const PoissonOptions&,
                                                        const linalg::Vector&, rbf::WeightCache<2>*);
-template std::vector<double> face_normal_derivative<3>(const CellGraph<3>&, const DofLayout<3>&,
+template std::vector<double> face_normal_derivative<3>(const tree::CellGraph<3>&, const DofLayout<3>&,
                                                        const Boundary<3>&, const PoissonOptions&,
                                                        const linalg::Vector&, rbf::WeightCache<3>*);
 

@@ -18,7 +18,7 @@ namespace liquid::mac {
 /// known values (interface, walls) come from `boundary`. Throws liquid::Error naming the face when
 /// a stencil has no usable weights. `cache`: as assemble_poisson's.
 template <int Dim>
-std::vector<double> face_normal_derivative(const CellGraph<Dim>& graph, const DofLayout<Dim>& layout,
+std::vector<double> face_normal_derivative(const tree::CellGraph<Dim>& graph, const DofLayout<Dim>& layout,
                                            const Boundary<Dim>& boundary, const PoissonOptions& options,
                                            const linalg::Vector& p, rbf::WeightCache<Dim>* cache = nullptr);
 

@@ -9,14 +9,14 @@
 namespace liquid::mac {
 
 template <int Dim>
-bool regular_neighbourhood(const CellGraph<Dim>& graph, CellId c) {
+bool regular_neighbourhood(const tree::CellGraph<Dim>& graph, tree::CellId c) {
   for (int k = 0; k < Dim; ++k)
     for (int dir : {-1, 1}) {
       int n_faces = 0;
       bool ok = true;
-      graph.for_each_side_face(c, k, dir, [&](const SideFace& s) {
+      graph.for_each_side_face(c, k, dir, [&](const tree::SideFace& s) {
         ++n_faces;
-        ok = ok && (s.adjacency == Adjacency::same || s.adjacency == Adjacency::boundary);
+        ok = ok && (s.adjacency == tree::Adjacency::same || s.adjacency == tree::Adjacency::boundary);
       });
       if (n_faces != 1 || !ok) return false;
     }
@@ -24,8 +24,8 @@ bool regular_neighbourhood(const CellGraph<Dim>& graph, CellId c) {
 }
 
 template <int Dim>
-RowKind fd_row(const CellGraph<Dim>& graph, const DofLayout<Dim>& layout, const Boundary<Dim>& boundary,
-               CellId c, Row& row, std::span<const double> coefficient) {
+RowKind fd_row(const tree::CellGraph<Dim>& graph, const DofLayout<Dim>& layout, const Boundary<Dim>& boundary,
+               tree::CellId c, Row& row, std::span<const double> coefficient) {
   const int i = layout.dof_of_cell[c];
   const Vec<Dim> x = graph.centre(c);
   const Vec<Dim> h = graph.cell_size(c);
@@ -41,11 +41,11 @@ RowKind fd_row(const CellGraph<Dim>& graph, const DofLayout<Dim>& layout, const 
       d[s] = h[k];
       dof[s] = i;
       val[s] = 0.0;
-      graph.for_each_side_face(c, k, dir, [&](const SideFace& sf) {
+      graph.for_each_side_face(c, k, dir, [&](const tree::SideFace& sf) {
         // A Neumann wall's flux is given (beta dp/dn); every other side's weight takes its face's beta.
-        if (!coefficient.empty() && (sf.adjacency != Adjacency::boundary || boundary.dirichlet_walls))
+        if (!coefficient.empty() && (sf.adjacency != tree::Adjacency::boundary || boundary.dirichlet_walls))
           beta[s] = coefficient[sf.face];
-        if (sf.adjacency == Adjacency::boundary) {
+        if (sf.adjacency == tree::Adjacency::boundary) {
           Vec<Dim> w = x;
           w[k] = dir < 0 ? graph.domain().lo[k] : graph.domain().hi[k];
           if (!boundary.dirichlet_walls) {
@@ -106,12 +106,12 @@ int PoissonOptions::node_cap(int n_target) const {
 }
 
 template <int Dim>
-RowKind rbf_row(const CellGraph<Dim>& graph, const DofLayout<Dim>& layout, const Boundary<Dim>& boundary,
-                CellId c, const PoissonOptions& options, rbf::WeightCache<Dim>* cache,
-                RowScratch<Dim>& scratch, Row& row, rbf::Status& status) {
+RowKind rbf_row(const tree::CellGraph<Dim>& graph, const DofLayout<Dim>& layout,
+                const Boundary<Dim>& boundary, tree::CellId c, const PoissonOptions& options,
+                rbf::WeightCache<Dim>* cache, RowScratch<Dim>& scratch, Row& row, rbf::Status& status) {
   const int i = layout.dof_of_cell[c];
   const Vec<Dim> x = graph.centre(c);
-  const CellId seed[1] = {c};
+  const tree::CellId seed[1] = {c};
   auto& nodes = scratch.nodes;
   const int n_target = stencil_size(Dim, options.rbf.degree, options.growth);
   gather_stencil<Dim>(graph, layout, boundary, seed, x, options.rule, n_target, options.node_cap(n_target),
@@ -135,15 +135,15 @@ RowKind rbf_row(const CellGraph<Dim>& graph, const DofLayout<Dim>& layout, const
   return RowKind::rbf;
 }
 
-template bool regular_neighbourhood<2>(const CellGraph<2>&, CellId);
-template bool regular_neighbourhood<3>(const CellGraph<3>&, CellId);
-template RowKind fd_row<2>(const CellGraph<2>&, const DofLayout<2>&, const Boundary<2>&, CellId, Row&,
-                           std::span<const double>);
-template RowKind fd_row<3>(const CellGraph<3>&, const DofLayout<3>&, const Boundary<3>&, CellId, Row&,
-                           std::span<const double>);
-template RowKind rbf_row<2>(const CellGraph<2>&, const DofLayout<2>&, const Boundary<2>&, CellId,
+template bool regular_neighbourhood<2>(const tree::CellGraph<2>&, tree::CellId);
+template bool regular_neighbourhood<3>(const tree::CellGraph<3>&, tree::CellId);
+template RowKind fd_row<2>(const tree::CellGraph<2>&, const DofLayout<2>&, const Boundary<2>&, tree::CellId,
+                           Row&, std::span<const double>);
+template RowKind fd_row<3>(const tree::CellGraph<3>&, const DofLayout<3>&, const Boundary<3>&, tree::CellId,
+                           Row&, std::span<const double>);
+template RowKind rbf_row<2>(const tree::CellGraph<2>&, const DofLayout<2>&, const Boundary<2>&, tree::CellId,
                             const PoissonOptions&, rbf::WeightCache<2>*, RowScratch<2>&, Row&, rbf::Status&);
-template RowKind rbf_row<3>(const CellGraph<3>&, const DofLayout<3>&, const Boundary<3>&, CellId,
+template RowKind rbf_row<3>(const tree::CellGraph<3>&, const DofLayout<3>&, const Boundary<3>&, tree::CellId,
                             const PoissonOptions&, rbf::WeightCache<3>*, RowScratch<3>&, Row&, rbf::Status&);
 
 }  // namespace liquid::mac

@@ -64,22 +64,22 @@ struct RowScratch {
 
 /// True when every side of c has exactly one face and it is full (same level) or a wall.
 template <int Dim>
-bool regular_neighbourhood(const CellGraph<Dim>& graph, CellId c);
+bool regular_neighbourhood(const tree::CellGraph<Dim>& graph, tree::CellId c);
 
 /// Adds the FD row of -Lap p at the regular cell c to `row` (whose rhs already holds -f); a centre
 /// on the interface becomes p_c = value. Returns RowKind::fd or RowKind::on_interface. With
 /// `coefficient` (per face id) the row is -div(beta grad p): each side's weight times its face's
 /// beta, except at a Neumann wall, whose flux (beta dp/dn) is given.
 template <int Dim>
-RowKind fd_row(const CellGraph<Dim>& graph, const DofLayout<Dim>& layout, const Boundary<Dim>& boundary,
-               CellId c, Row& row, std::span<const double> coefficient = {});
+RowKind fd_row(const tree::CellGraph<Dim>& graph, const DofLayout<Dim>& layout, const Boundary<Dim>& boundary,
+               tree::CellId c, Row& row, std::span<const double> coefficient = {});
 
 /// Adds the RBF-FD row of -Lap p at cell c to `row`; a centre within 1e-3 cell sizes of the
 /// interface takes the interface value (RowKind::on_interface). `status` receives the weights'
 /// status. Throws liquid::Error naming the cell when no usable weights exist.
 template <int Dim>
-RowKind rbf_row(const CellGraph<Dim>& graph, const DofLayout<Dim>& layout, const Boundary<Dim>& boundary,
-                CellId c, const PoissonOptions& options, rbf::WeightCache<Dim>* cache,
-                RowScratch<Dim>& scratch, Row& row, rbf::Status& status);
+RowKind rbf_row(const tree::CellGraph<Dim>& graph, const DofLayout<Dim>& layout,
+                const Boundary<Dim>& boundary, tree::CellId c, const PoissonOptions& options,
+                rbf::WeightCache<Dim>* cache, RowScratch<Dim>& scratch, Row& row, rbf::Status& status);
 
 }  // namespace liquid::mac

@@ -16,11 +16,11 @@ namespace {
 
 /// The unknown nearest the domain's centre.
 template <int Dim>
-CellId pin_cell(const CellGraph<Dim>& graph, const DofLayout<Dim>& layout) {
+tree::CellId pin_cell(const tree::CellGraph<Dim>& graph, const DofLayout<Dim>& layout) {
   const Vec<Dim> mid = graph.domain().centre();
   double best = std::numeric_limits<double>::infinity();
-  CellId pinned = no_cell;
-  for (CellId c : layout.cell_of_dof) {
+  tree::CellId pinned = tree::no_cell;
+  for (tree::CellId c : layout.cell_of_dof) {
     const double d = (graph.centre(c) - mid).squaredNorm();
     if (d < best) best = d, pinned = c;
   }
@@ -29,7 +29,7 @@ CellId pin_cell(const CellGraph<Dim>& graph, const DofLayout<Dim>& layout) {
 
 /// Every row of -Lap p = -f, in parallel; the row statistics go to `stats`.
 template <int Dim>
-std::vector<Row> laplacian_rows(const CellGraph<Dim>& graph, const PoissonSystem<Dim>& sys,
+std::vector<Row> laplacian_rows(const tree::CellGraph<Dim>& graph, const PoissonSystem<Dim>& sys,
                                 const PoissonProblem<Dim>& problem, const PoissonOptions& options,
                                 rbf::WeightCache<Dim>* shared, AssemblyStats& stats) {
   const long n = sys.n_unknowns();
@@ -44,7 +44,7 @@ std::vector<Row> laplacian_rows(const CellGraph<Dim>& graph, const PoissonSystem
   parallel_for(
       n, [] { return Local{}; },
       [&](Local& local, long i) {
-        const CellId c = sys.layout.cell_of_dof[i];
+        const tree::CellId c = sys.layout.cell_of_dof[i];
         Row& row = rows[i];
         if (c == sys.pinned) {
           row.entries = {{static_cast<int>(i), 1.0}};
@@ -103,7 +103,7 @@ std::vector<Row> laplacian_rows(const CellGraph<Dim>& graph, const PoissonSystem
 /// rest is a Laplacian with one Dirichlet node, its FD part symmetric), and a zero-mean system
 /// gets a multiplier column and a last row asking for zero volume-weighted mean.
 template <int Dim>
-void fill_matrix(const CellGraph<Dim>& graph, const std::vector<Row>& rows, PoissonSystem<Dim>& sys) {
+void fill_matrix(const tree::CellGraph<Dim>& graph, const std::vector<Row>& rows, PoissonSystem<Dim>& sys) {
   const long n = sys.n_unknowns();
   const long size = n + (sys.bordered ? 1 : 0);
   std::vector<Eigen::Triplet<double>> triplets;
@@ -111,7 +111,7 @@ void fill_matrix(const CellGraph<Dim>& graph, const std::vector<Row>& rows, Pois
   for (const Row& r : rows) n_entries += r.entries.size();
   triplets.reserve(n_entries + (sys.bordered ? 2 * n : 0));
   sys.b.resize(size);
-  const int pinned_dof = sys.pinned == no_cell ? -1 : sys.layout.dof_of_cell[sys.pinned];
+  const int pinned_dof = sys.pinned == tree::no_cell ? -1 : sys.layout.dof_of_cell[sys.pinned];
   const double pinned_value = pinned_dof < 0 ? 0.0 : rows[pinned_dof].rhs;
   for (long i = 0; i < n; ++i) {
     sys.b[i] = rows[i].rhs;
@@ -125,7 +125,7 @@ void fill_matrix(const CellGraph<Dim>& graph, const std::vector<Row>& rows, Pois
   if (sys.bordered) {
     const double h_min = graph.cell_size(sys.layout.cell_of_dof.front()).minCoeff();
     double volume = 0.0;
-    for (CellId c : sys.layout.cell_of_dof) volume += graph.volume(c);
+    for (tree::CellId c : sys.layout.cell_of_dof) volume += graph.volume(c);
     const double scale = 1.0 / (h_min * h_min);
     for (long i = 0; i < n; ++i) {
       triplets.emplace_back(i, n, 1.0);
@@ -139,13 +139,13 @@ void fill_matrix(const CellGraph<Dim>& graph, const std::vector<Row>& rows, Pois
     LIQUID_VERIFY(std::isfinite(sys.b[i]),
                   "the Poisson right-hand side is {} in the row of unknown {} (cell {}): check the boundary "
                   "values",
-                  sys.b[i], i, i < n ? sys.layout.cell_of_dof[i] : no_cell);
+                  sys.b[i], i, i < n ? sys.layout.cell_of_dof[i] : tree::no_cell);
 }
 
 }  // namespace
 
 template <int Dim>
-PoissonSystem<Dim> assemble_poisson(const CellGraph<Dim>& graph, const PoissonProblem<Dim>& problem,
+PoissonSystem<Dim> assemble_poisson(const tree::CellGraph<Dim>& graph, const PoissonProblem<Dim>& problem,
                                     const PoissonOptions& options, rbf::WeightCache<Dim>* cache) {
   LIQUID_VERIFY(problem.f || !problem.f_cells.empty(), "Poisson problem without a right-hand side");
   LIQUID_VERIFY(problem.f_cells.empty() || static_cast<int>(problem.f_cells.size()) >= graph.cell_capacity(),
@@ -162,7 +162,7 @@ PoissonSystem<Dim> assemble_poisson(const CellGraph<Dim>& graph, const PoissonPr
                 "Poisson problem: {} face coefficients for {} face ids", problem.face_coefficient.size(),
                 graph.face_capacity());
   if (!problem.face_coefficient.empty())
-    for (FaceId f : graph.face_ids())
+    for (tree::FaceId f : graph.face_ids())
       LIQUID_VERIFY(problem.face_coefficient[f] > 0.0 && std::isfinite(problem.face_coefficient[f]),
                     "Poisson problem: face {} has coefficient {} (must be positive and finite)", f,
                     problem.face_coefficient[f]);
@@ -189,9 +189,9 @@ PoissonSystem<Dim> assemble_poisson(const CellGraph<Dim>& graph, const PoissonPr
   return sys;
 }
 
-template PoissonSystem<2> assemble_poisson<2>(const CellGraph<2>&, const PoissonProblem<2>&,
+template PoissonSystem<2> assemble_poisson<2>(const tree::CellGraph<2>&, const PoissonProblem<2>&,
                                               const PoissonOptions&, rbf::WeightCache<2>*);
-template PoissonSystem<3> assemble_poisson<3>(const CellGraph<3>&, const PoissonProblem<3>&,
+template PoissonSystem<3> assemble_poisson<3>(const tree::CellGraph<3>&, const PoissonProblem<3>&,
                                               const PoissonOptions&, rbf::WeightCache<3>*);
 
 }  // namespace liquid::mac

@@ -47,7 +47,7 @@ struct AssemblyStats {
   int min_degree = 99;
   int max_stencil = 0;           ///< the most nodes of an RBF-FD row
   double worst_condition = 0.0;  ///< of the local RBF systems (cached ones: at unit scale)
-  CellId worst_condition_cell = no_cell;
+  tree::CellId worst_condition_cell = tree::no_cell;
   double seconds = 0.0;
 };
 
@@ -57,9 +57,9 @@ struct PoissonSystem {
   Boundary<Dim> boundary;
   linalg::SparseMatrix A;
   linalg::Vector b;
-  CellId pinned = no_cell;  ///< the pinned cell (Nullspace::pin on a singular problem)
-  bool singular = false;    ///< no Dirichlet value anywhere: p is defined up to a constant
-  bool bordered = false;    ///< true for Nullspace::zero_mean: the last unknown is a multiplier
+  tree::CellId pinned = tree::no_cell;  ///< the pinned cell (Nullspace::pin on a singular problem)
+  bool singular = false;                ///< no Dirichlet value anywhere: p is defined up to a constant
+  bool bordered = false;                ///< true for Nullspace::zero_mean: the last unknown is a multiplier
   AssemblyStats stats;
 
   long n_unknowns() const { return layout.n_unknowns(); }
@@ -71,14 +71,14 @@ struct PoissonSystem {
 /// time steps of a solver; none: a cache for this assembly alone. The weights are the same bits
 /// either way (an entry is a function of its key).
 template <int Dim>
-PoissonSystem<Dim> assemble_poisson(const CellGraph<Dim>& graph, const PoissonProblem<Dim>& problem,
+PoissonSystem<Dim> assemble_poisson(const tree::CellGraph<Dim>& graph, const PoissonProblem<Dim>& problem,
                                     const PoissonOptions& options, rbf::WeightCache<Dim>* cache = nullptr);
 
 /// face_normal_derivative() on the system's unknowns and boundary.
 template <int Dim>
-std::vector<double> face_normal_derivative(const CellGraph<Dim>& graph, const PoissonSystem<Dim>& system,
-                                           const PoissonOptions& options, const linalg::Vector& p,
-                                           rbf::WeightCache<Dim>* cache = nullptr) {
+std::vector<double> face_normal_derivative(const tree::CellGraph<Dim>& graph,
+                                           const PoissonSystem<Dim>& system, const PoissonOptions& options,
+                                           const linalg::Vector& p, rbf::WeightCache<Dim>* cache = nullptr) {
   return face_normal_derivative<Dim>(graph, system.layout, system.boundary, options, p, cache);
 }
 

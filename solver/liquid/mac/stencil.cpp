@@ -36,20 +36,20 @@ namespace {
 
 // Candidate cells around the seeds, by rule; duplicates removed, seeds first.
 template <int Dim>
-void candidates(const CellGraph<Dim>& graph, std::span<const CellId> seeds, const Vec<Dim>& at,
-                StencilRule rule, int n_target, std::vector<CellId>& out, std::size_t& n_core) {
-  thread_local std::vector<CellId> ring;
+void candidates(const tree::CellGraph<Dim>& graph, std::span<const tree::CellId> seeds, const Vec<Dim>& at,
+                StencilRule rule, int n_target, std::vector<tree::CellId>& out, std::size_t& n_core) {
+  thread_local std::vector<tree::CellId> ring;
   out.clear();
   n_core = 0;
   auto add_ring = [&](int k) {
-    for (CellId s : seeds) {
+    for (tree::CellId s : seeds) {
       graph.k_ring(s, k, ring);
       out.insert(out.end(), ring.begin(), ring.end());
     }
     std::sort(out.begin(), out.end());
     out.erase(std::unique(out.begin(), out.end()), out.end());
   };
-  auto by_distance = [&](CellId a, CellId b) {
+  auto by_distance = [&](tree::CellId a, tree::CellId b) {
     const double da = (graph.centre(a) - at).squaredNorm(), db = (graph.centre(b) - at).squaredNorm();
     return da != db ? da < db : a < b;
   };
@@ -69,7 +69,8 @@ void candidates(const CellGraph<Dim>& graph, std::span<const CellId> seeds, cons
         if (static_cast<int>(out.size()) < n_target) continue;
         if (!by_area) break;
         double area = 0.0;
-        for (CellId c : out) area += std::ldexp(1.0, -(Dim - 1) * std::max(0, graph.level(c) - ref_level));
+        for (tree::CellId c : out)
+          area += std::ldexp(1.0, -(Dim - 1) * std::max(0, graph.level(c) - ref_level));
         if (2.0 * area >= n_target) break;
       }
       std::sort(out.begin(), out.end(), by_distance);
@@ -88,14 +89,14 @@ void candidates(const CellGraph<Dim>& graph, std::span<const CellId> seeds, cons
       std::sort(out.begin(), out.end(), by_distance);
       n_core = out.size();
       if (static_cast<int>(out.size()) >= n_target) return;
-      std::vector<CellId> first(out.begin(), out.end());
+      std::vector<tree::CellId> first(out.begin(), out.end());
       for (int k = 2; k <= max_k; ++k) {
         add_ring(k);
         if (static_cast<int>(out.size()) >= n_target) break;
       }
-      std::vector<CellId> first_by_id = first, rest;
+      std::vector<tree::CellId> first_by_id = first, rest;
       std::sort(first_by_id.begin(), first_by_id.end());
-      for (CellId c : out)
+      for (tree::CellId c : out)
         if (!std::binary_search(first_by_id.begin(), first_by_id.end(), c)) rest.push_back(c);
       std::sort(rest.begin(), rest.end(), by_distance);
       out = first;
@@ -108,12 +109,12 @@ void candidates(const CellGraph<Dim>& graph, std::span<const CellId> seeds, cons
 }  // namespace
 
 template <int Dim>
-void gather_stencil(const CellGraph<Dim>& graph, const DofLayout<Dim>& layout, const Boundary<Dim>& boundary,
-                    std::span<const CellId> seeds, const Vec<Dim>& at, StencilRule rule, int n_target,
-                    int n_cap, std::vector<StencilNode<Dim>>& out) {
+void gather_stencil(const tree::CellGraph<Dim>& graph, const DofLayout<Dim>& layout,
+                    const Boundary<Dim>& boundary, std::span<const tree::CellId> seeds, const Vec<Dim>& at,
+                    StencilRule rule, int n_target, int n_cap, std::vector<StencilNode<Dim>>& out) {
   LIQUID_ASSERT(!seeds.empty(), "gather_stencil needs a seed cell");
   LIQUID_ASSERT(n_cap == 0 || n_cap >= n_target, "stencil cap {} below its target {}", n_cap, n_target);
-  thread_local std::vector<CellId> cells;
+  thread_local std::vector<tree::CellId> cells;
   std::size_t n_core_cells = 0, n_core_nodes = 0;
   candidates(graph, seeds, at, rule, n_target, cells, n_core_cells);
   out.clear();
@@ -121,7 +122,7 @@ void gather_stencil(const CellGraph<Dim>& graph, const DofLayout<Dim>& layout, c
   const Vec<Dim> anchor = graph.centre(seeds[0]);
   for (std::size_t i = 0; i < cells.size(); ++i) {
     if (i == n_core_cells) n_core_nodes = out.size();
-    const CellId c = cells[i];
+    const tree::CellId c = cells[i];
     const int dof = layout.dof_of_cell[c];
     const Vec<Dim> x = graph.centre(c);
     if (dof < 0) {
@@ -130,10 +131,10 @@ void gather_stencil(const CellGraph<Dim>& graph, const DofLayout<Dim>& layout, c
       // behind the interface are in the level-set case.
       if (boundary.air_cells()) {
         bool touches = false;
-        for (FaceId f : graph.faces(c)) {
-          const GraphFace& g = graph.face(f);
-          const CellId o = g.cell[0] == c ? g.cell[1] : g.cell[0];
-          if (o != no_cell && layout.dof_of_cell[o] >= 0) {
+        for (tree::FaceId f : graph.faces(c)) {
+          const tree::GraphFace& g = graph.face(f);
+          const tree::CellId o = g.cell[0] == c ? g.cell[1] : g.cell[0];
+          if (o != tree::no_cell && layout.dof_of_cell[o] >= 0) {
             touches = true;
             break;
           }
@@ -254,11 +255,11 @@ rbf::Status stencil_weights(std::vector<StencilNode<Dim>>& nodes, const Vec<Dim>
   return solve();
 }
 
-template void gather_stencil<2>(const CellGraph<2>&, const DofLayout<2>&, const Boundary<2>&,
-                                std::span<const CellId>, const Vec<2>&, StencilRule, int, int,
+template void gather_stencil<2>(const tree::CellGraph<2>&, const DofLayout<2>&, const Boundary<2>&,
+                                std::span<const tree::CellId>, const Vec<2>&, StencilRule, int, int,
                                 std::vector<StencilNode<2>>&);
-template void gather_stencil<3>(const CellGraph<3>&, const DofLayout<3>&, const Boundary<3>&,
-                                std::span<const CellId>, const Vec<3>&, StencilRule, int, int,
+template void gather_stencil<3>(const tree::CellGraph<3>&, const DofLayout<3>&, const Boundary<3>&,
+                                std::span<const tree::CellId>, const Vec<3>&, StencilRule, int, int,
                                 std::vector<StencilNode<3>>&);
 template rbf::Status stencil_weights<2>(std::vector<StencilNode<2>>&, const Vec<2>&, const rbf::Operator<2>&,
                                         const rbf::Config&, std::vector<double>&, long&, rbf::WeightCache<2>*,

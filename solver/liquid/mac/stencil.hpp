@@ -49,9 +49,9 @@ struct StencilNode {
 /// them, the nodes ordered by distance from `at`. `n_cap` > 0 (ring rule only, at least n_target)
 /// keeps the nearest n_cap nodes and every node tied with the last kept.
 template <int Dim>
-void gather_stencil(const CellGraph<Dim>& graph, const DofLayout<Dim>& layout, const Boundary<Dim>& boundary,
-                    std::span<const CellId> seeds, const Vec<Dim>& at, StencilRule rule, int n_target,
-                    int n_cap, std::vector<StencilNode<Dim>>& out);
+void gather_stencil(const tree::CellGraph<Dim>& graph, const DofLayout<Dim>& layout,
+                    const Boundary<Dim>& boundary, std::span<const tree::CellId> seeds, const Vec<Dim>& at,
+                    StencilRule rule, int n_target, int n_cap, std::vector<StencilNode<Dim>>& out);
 
 /// Weights `w` of `op` at `at` on `nodes`, dropping an offending node and retrying (up to 4 times)
 /// when the local system is unusable; `n_retried` counts the drops. With a cache, the nodes are

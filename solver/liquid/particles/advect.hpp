@@ -13,7 +13,7 @@
 #include "liquid/core/types.hpp"
 #include "liquid/levelset/levelset.hpp"
 
-namespace liquid {
+namespace liquid::particles {
 
 enum class Integrator { rk2, rk3 };
 const char* to_string(Integrator integrator);
@@ -97,4 +97,4 @@ AdvectReport advect(std::span<Vec<Dim>> x, double dt, Integrator integrator, con
   return total;
 }
 
-}  // namespace liquid
+}  // namespace liquid::particles

@@ -6,14 +6,14 @@
 #include "liquid/core/error.hpp"
 #include "liquid/core/parallel.hpp"
 
-namespace liquid {
+namespace liquid::particles {
 
 namespace {
 
 /// True when c holds x by the same rule as CellGraph::locate: half-open [lo, hi) on every axis,
 /// closed at the domain's upper side, positions clamped onto the domain.
 template <int Dim>
-bool holds(const CellGraph<Dim>& graph, CellId c, const Vec<Dim>& x) {
+bool holds(const tree::CellGraph<Dim>& graph, tree::CellId c, const Vec<Dim>& x) {
   if (!graph.alive(c)) return false;
   const Box<Dim> b = graph.box(c);
   const Box<Dim>& d = graph.domain();
@@ -29,7 +29,7 @@ bool holds(const CellGraph<Dim>& graph, CellId c, const Vec<Dim>& x) {
 
 void CellBins::sort(int cell_capacity) {
   begin.assign(static_cast<std::size_t>(cell_capacity) + 1, 0);
-  for (CellId c : cell) {
+  for (tree::CellId c : cell) {
     LIQUID_ASSERT(c >= 0 && c < cell_capacity, "CellBins::sort: cell id {} out of range", c);
     ++begin[c + 1];
   }
@@ -40,20 +40,20 @@ void CellBins::sort(int cell_capacity) {
 }
 
 template <int Dim>
-void bin_particles(const CellGraph<Dim>& graph, std::span<const Vec<Dim>> x, CellBins& bins) {
+void bin_particles(const tree::CellGraph<Dim>& graph, std::span<const Vec<Dim>> x, CellBins& bins) {
   bins.cell.resize(x.size());
   graph.locate(x, bins.cell);
   bins.sort(graph.cell_capacity());
 }
 
 template <int Dim>
-BinStats rebin(const CellGraph<Dim>& graph, std::span<const Vec<Dim>> x, CellBins& bins,
-               const AdaptReport* report) {
-  bins.cell.resize(x.size(), no_cell);
+BinStats rebin(const tree::CellGraph<Dim>& graph, std::span<const Vec<Dim>> x, CellBins& bins,
+               const tree::AdaptReport* report) {
+  bins.cell.resize(x.size(), tree::no_cell);
   // (removed cell, cell that replaced part of it), sorted: O(changed cells log changed cells).
-  std::vector<std::pair<CellId, CellId>> replaced;
+  std::vector<std::pair<tree::CellId, tree::CellId>> replaced;
   if (report) {
-    const Origins& o = report->cell_origins;
+    const tree::Origins& o = report->cell_origins;
     for (std::size_t n = 0; n < report->new_cells.size(); ++n)
       for (int k = o.begin[n]; k < o.begin[n + 1]; ++k)
         replaced.emplace_back(o.source[k], report->new_cells[n]);
@@ -68,14 +68,14 @@ BinStats rebin(const CellGraph<Dim>& graph, std::span<const Vec<Dim>> x, CellBin
       [&](Counts& t, long i) {
         const Vec<Dim>& xi = x[i];
         LIQUID_VERIFY(xi.allFinite(), "rebin: particle {} has a non-finite position", i);
-        const CellId old = bins.cell[i];
-        if (old != no_cell && holds(graph, old, xi)) {
+        const tree::CellId old = bins.cell[i];
+        if (old != tree::no_cell && holds(graph, old, xi)) {
           ++t.s.stayed;
           return;
         }
-        if (old != no_cell && !replaced.empty()) {
-          auto it =
-              std::lower_bound(replaced.begin(), replaced.end(), std::pair<CellId, CellId>{old, no_cell});
+        if (old != tree::no_cell && !replaced.empty()) {
+          auto it = std::lower_bound(replaced.begin(), replaced.end(),
+                                     std::pair<tree::CellId, tree::CellId>{old, tree::no_cell});
           bool was_replaced = false;
           for (; it != replaced.end() && it->first == old; ++it) {
             was_replaced = true;
@@ -104,11 +104,12 @@ BinStats rebin(const CellGraph<Dim>& graph, std::span<const Vec<Dim>> x, CellBin
   return total;
 }
 
-#define LIQUID_BINS(D)                                                                     \
-  template void bin_particles<D>(const CellGraph<D>&, std::span<const Vec<D>>, CellBins&); \
-  template BinStats rebin<D>(const CellGraph<D>&, std::span<const Vec<D>>, CellBins&, const AdaptReport*);
+#define LIQUID_BINS(D)                                                                           \
+  template void bin_particles<D>(const tree::CellGraph<D>&, std::span<const Vec<D>>, CellBins&); \
+  template BinStats rebin<D>(const tree::CellGraph<D>&, std::span<const Vec<D>>, CellBins&,      \
+                             const tree::AdaptReport*);
 LIQUID_BINS(2)
 LIQUID_BINS(3)
 #undef LIQUID_BINS
 
-}  // namespace liquid
+}  // namespace liquid::particles

@@ -18,19 +18,19 @@
 
 #include "liquid/tree/cell_graph.hpp"
 
-namespace liquid {
+namespace liquid::particles {
 
 struct CellBins {
-  std::vector<CellId> cell;         ///< per particle: the leaf holding it
+  std::vector<tree::CellId> cell;   ///< per particle: the leaf holding it
   std::vector<std::int32_t> begin;  ///< per cell id, plus one: [begin[c], begin[c+1]) in `index`
   std::vector<std::int32_t> index;  ///< particle indices grouped by cell, ascending within a cell
 
   /// The particles of cell c (empty for a dead or unknown id).
-  std::span<const std::int32_t> of(CellId c) const {
-    if (c < 0 || c + 1 >= static_cast<CellId>(begin.size())) return {};
+  std::span<const std::int32_t> of(tree::CellId c) const {
+    if (c < 0 || c + 1 >= static_cast<tree::CellId>(begin.size())) return {};
     return {index.data() + begin[c], static_cast<std::size_t>(begin[c + 1] - begin[c])};
   }
-  int count(CellId c) const { return static_cast<int>(of(c).size()); }
+  int count(tree::CellId c) const { return static_cast<int>(of(c).size()); }
   int n_particles() const { return static_cast<int>(cell.size()); }
   /// Rebuilds begin/index from `cell` (a counting sort), for a graph of `cell_capacity` ids.
   void sort(int cell_capacity);
@@ -45,7 +45,7 @@ struct BinStats {
 
 /// Bins every position from scratch (a root location per particle). Uses OpenMP.
 template <int Dim>
-void bin_particles(const CellGraph<Dim>& graph, std::span<const Vec<Dim>> x, CellBins& bins);
+void bin_particles(const tree::CellGraph<Dim>& graph, std::span<const Vec<Dim>> x, CellBins& bins);
 
 /// Rebins after the particles moved and/or the graph changed. `bins.cell` holds the previous cells
 /// and must have one entry per position (particles appended since carry no_cell and are located
@@ -53,7 +53,7 @@ void bin_particles(const CellGraph<Dim>& graph, std::span<const Vec<Dim>> x, Cel
 /// binning, or nullptr when it did not change. Uses OpenMP; the result does not depend on the
 /// thread count.
 template <int Dim>
-BinStats rebin(const CellGraph<Dim>& graph, std::span<const Vec<Dim>> x, CellBins& bins,
-               const AdaptReport* report = nullptr);
+BinStats rebin(const tree::CellGraph<Dim>& graph, std::span<const Vec<Dim>> x, CellBins& bins,
+               const tree::AdaptReport* report = nullptr);
 
-}  // namespace liquid
+}  // namespace liquid::particles

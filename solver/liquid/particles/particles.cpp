@@ -3,7 +3,7 @@
 #include "liquid/core/error.hpp"
 #include "liquid/particles/advect.hpp"
 
-namespace liquid {
+namespace liquid::particles {
 
 template <int Dim>
 int Particles<Dim>::add_field(const std::string& name, int components) {
@@ -77,4 +77,4 @@ const char* to_string(Integrator integrator) {
 template class Particles<2>;
 template class Particles<3>;
 
-}  // namespace liquid
+}  // namespace liquid::particles

@@ -17,7 +17,7 @@
 
 #include "liquid/core/types.hpp"
 
-namespace liquid {
+namespace liquid::particles {
 
 template <int Dim>
 class Particles {
@@ -65,4 +65,4 @@ class Particles {
 extern template class Particles<2>;
 extern template class Particles<3>;
 
-}  // namespace liquid
+}  // namespace liquid::particles

@@ -11,14 +11,14 @@
 #include "liquid/core/hash.hpp"
 #include "liquid/core/parallel.hpp"
 
-namespace liquid {
+namespace liquid::particles {
 
 namespace {
 
 /// The pattern points of one cell, in physical coordinates.
 template <int Dim>
-void cell_points(const CellGraph<Dim>& graph, CellId c, const std::vector<Vec<Dim>>& pattern, double jitter,
-                 std::uint64_t seed, std::vector<Vec<Dim>>& out) {
+void cell_points(const tree::CellGraph<Dim>& graph, tree::CellId c, const std::vector<Vec<Dim>>& pattern,
+                 double jitter, std::uint64_t seed, std::vector<Vec<Dim>>& out) {
   const Box<Dim> b = graph.box(c);
   const double spacing = std::pow(static_cast<double>(pattern.size()), -1.0 / Dim);
   out.clear();
@@ -61,7 +61,7 @@ std::vector<Vec<Dim>> halton_points(int n) {
 }
 
 template <int Dim>
-long seed_region(const CellGraph<Dim>& graph, const levelset::Function<Dim>& region,
+long seed_region(const tree::CellGraph<Dim>& graph, const levelset::Function<Dim>& region,
                  const SeedOptions& options, Particles<Dim>& particles, const VelocitySource<Dim>& velocity) {
   LIQUID_VERIFY(options.jitter >= 0.0 && options.jitter < 1.0, "seed: jitter {} is outside [0, 1)",
                 options.jitter);
@@ -69,7 +69,7 @@ long seed_region(const CellGraph<Dim>& graph, const levelset::Function<Dim>& reg
   const int per_cell = default_count<Dim>(options.per_cell);
   LIQUID_VERIFY(per_cell >= 1 && per_cell <= 4096, "seed: {} points per cell is outside [1, 4096]", per_cell);
   const auto pattern = halton_points<Dim>(per_cell);
-  const std::vector<CellId> cells = graph.cell_ids();
+  const std::vector<tree::CellId> cells = graph.cell_ids();
   // Per cell, the points inside the region; then appended in cell order.
   std::vector<std::vector<Vec<Dim>>> kept(cells.size());
   parallel_for(
@@ -85,7 +85,7 @@ long seed_region(const CellGraph<Dim>& graph, const levelset::Function<Dim>& reg
       },
       [](std::vector<Vec<Dim>>&) {}, 64);
   const int first = particles.size();
-  std::vector<CellId> owner;
+  std::vector<tree::CellId> owner;
   for (std::size_t i = 0; i < cells.size(); ++i)
     for (const auto& p : kept[i]) {
       particles.push_back(p, Vec<Dim>::Zero());
@@ -99,8 +99,9 @@ long seed_region(const CellGraph<Dim>& graph, const levelset::Function<Dim>& reg
 }
 
 template <int Dim>
-ReseedReport reseed(const CellGraph<Dim>& graph, std::span<const CellId> cells, const ReseedOptions& options,
-                    const VelocitySource<Dim>& velocity, Particles<Dim>& particles, CellBins& bins) {
+ReseedReport reseed(const tree::CellGraph<Dim>& graph, std::span<const tree::CellId> cells,
+                    const ReseedOptions& options, const VelocitySource<Dim>& velocity,
+                    Particles<Dim>& particles, CellBins& bins) {
   const int lo = options.lo > 0 ? options.lo : (Dim == 2 ? 3 : 5);
   const int hi = options.hi > 0 ? options.hi : (Dim == 2 ? 12 : 15);
   const int per_cell = default_count<Dim>(options.per_cell);
@@ -111,8 +112,8 @@ ReseedReport reseed(const CellGraph<Dim>& graph, std::span<const CellId> cells, 
   LIQUID_VERIFY(bins.n_particles() == particles.size(), "reseed: bins hold {} particles, there are {}",
                 bins.n_particles(), particles.size());
   ReseedReport report;
-  std::vector<CellId> chosen;
-  for (CellId c : cells) {
+  std::vector<tree::CellId> chosen;
+  for (tree::CellId c : cells) {
     if (!graph.alive(c)) continue;
     const int n = bins.count(c);
     if ((n == 0 && !options.fill_empty) || (n >= lo && n <= hi)) continue;
@@ -128,7 +129,7 @@ ReseedReport reseed(const CellGraph<Dim>& graph, std::span<const CellId> cells, 
   std::vector<std::vector<Vec<Dim>>> added(chosen.size());
   std::vector<Vec<Dim>> pts;
   for (std::size_t k = 0; k < chosen.size(); ++k) {
-    const CellId c = chosen[k];
+    const tree::CellId c = chosen[k];
     const auto own = bins.of(c);
     cell_points(graph, c, pattern, options.jitter, options.seed, pts);
     if (!options.keep) {
@@ -172,7 +173,7 @@ ReseedReport reseed(const CellGraph<Dim>& graph, std::span<const CellId> cells, 
 
   std::vector<std::int32_t> new_index;
   particles.compact(remove, &new_index);
-  std::vector<CellId> cell_of(particles.size());
+  std::vector<tree::CellId> cell_of(particles.size());
   for (std::size_t i = 0; i < new_index.size(); ++i)
     if (new_index[i] >= 0) cell_of[new_index[i]] = bins.cell[i];
   const int first = particles.size();
@@ -183,20 +184,21 @@ ReseedReport reseed(const CellGraph<Dim>& graph, std::span<const CellId> cells, 
     }
   report.created = particles.size() - first;
   velocity(std::span<const Vec<Dim>>(particles.x).subspan(first),
-           std::span<const CellId>(cell_of).subspan(first), std::span<Vec<Dim>>(particles.v).subspan(first));
+           std::span<const tree::CellId>(cell_of).subspan(first),
+           std::span<Vec<Dim>>(particles.v).subspan(first));
   bins.cell = std::move(cell_of);
   bins.sort(graph.cell_capacity());
   return report;
 }
 
-#define LIQUID_SEEDING(D)                                                                             \
-  template std::vector<Vec<D>> halton_points<D>(int);                                                 \
-  template long seed_region<D>(const CellGraph<D>&, const levelset::Function<D>&, const SeedOptions&, \
-                               Particles<D>&, const VelocitySource<D>&);                              \
-  template ReseedReport reseed<D>(const CellGraph<D>&, std::span<const CellId>, const ReseedOptions&, \
-                                  const VelocitySource<D>&, Particles<D>&, CellBins&);
+#define LIQUID_SEEDING(D)                                                                                   \
+  template std::vector<Vec<D>> halton_points<D>(int);                                                       \
+  template long seed_region<D>(const tree::CellGraph<D>&, const levelset::Function<D>&, const SeedOptions&, \
+                               Particles<D>&, const VelocitySource<D>&);                                    \
+  template ReseedReport reseed<D>(const tree::CellGraph<D>&, std::span<const tree::CellId>,                 \
+                                  const ReseedOptions&, const VelocitySource<D>&, Particles<D>&, CellBins&);
 LIQUID_SEEDING(2)
 LIQUID_SEEDING(3)
 #undef LIQUID_SEEDING
 
-}  // namespace liquid
+}  // namespace liquid::particles

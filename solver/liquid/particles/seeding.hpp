@@ -16,7 +16,7 @@
 #include "liquid/particles/particles.hpp"
 #include "liquid/tree/cell_graph.hpp"
 
-namespace liquid {
+namespace liquid::particles {
 
 /// The first n points of the Dim-dimensional Halton sequence (bases 2, 3, 5), in (0, 1)^Dim.
 template <int Dim>
@@ -24,8 +24,8 @@ std::vector<Vec<Dim>> halton_points(int n);
 
 /// Velocities for new particles: fills v[i] for the positions x[i] that lie in cells cell[i].
 template <int Dim>
-using VelocitySource =
-    std::function<void(std::span<const Vec<Dim>> x, std::span<const CellId> cell, std::span<Vec<Dim>> v)>;
+using VelocitySource = std::function<void(std::span<const Vec<Dim>> x, std::span<const tree::CellId> cell,
+                                          std::span<Vec<Dim>> v)>;
 
 struct SeedOptions {
   int per_cell = 0;        ///< points per cell; 0 means 2^Dim
@@ -38,7 +38,7 @@ struct SeedOptions {
 /// empty). Cells are visited in id order, so particle indices are reproducible. Returns how many
 /// particles were added. `region` is called from several threads at once.
 template <int Dim>
-long seed_region(const CellGraph<Dim>& graph, const levelset::Function<Dim>& region,
+long seed_region(const tree::CellGraph<Dim>& graph, const levelset::Function<Dim>& region,
                  const SeedOptions& options, Particles<Dim>& particles,
                  const VelocitySource<Dim>& velocity = {});
 
@@ -71,7 +71,8 @@ struct ReseedReport {
 /// fluid and is left alone, unless options.fill_empty says the caller knows it is. `bins` must be current; it
 /// is current again on return (new particles at the end, survivors in their old order). Deterministic.
 template <int Dim>
-ReseedReport reseed(const CellGraph<Dim>& graph, std::span<const CellId> cells, const ReseedOptions& options,
-                    const VelocitySource<Dim>& velocity, Particles<Dim>& particles, CellBins& bins);
+ReseedReport reseed(const tree::CellGraph<Dim>& graph, std::span<const tree::CellId> cells,
+                    const ReseedOptions& options, const VelocitySource<Dim>& velocity,
+                    Particles<Dim>& particles, CellBins& bins);
 
-}  // namespace liquid
+}  // namespace liquid::particles

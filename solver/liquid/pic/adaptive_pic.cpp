@@ -13,7 +13,7 @@
 #include "liquid/tree/builders.hpp"
 #include "liquid/tree/remap.hpp"
 
-namespace liquid {
+namespace liquid::pic {
 
 const char* to_string(PicTransfer transfer) {
   switch (transfer) {
@@ -67,8 +67,8 @@ PicSurface parse_pic_surface(const std::string& name) {
 namespace {
 
 template <int Dim>
-CellGraphOptions<Dim> graph_options(const PicOptions<Dim>& o) {
-  CellGraphOptions<Dim> g;
+tree::CellGraphOptions<Dim> graph_options(const PicOptions<Dim>& o) {
+  tree::CellGraphOptions<Dim> g;
   g.max_jump = o.max_jump;
   g.min_level = o.adaptive ? std::min(o.coarse_level, o.finest_level) : o.finest_level;
   g.max_level = o.finest_level;
@@ -76,7 +76,7 @@ CellGraphOptions<Dim> graph_options(const PicOptions<Dim>& o) {
 }
 
 template <int Dim>
-CellGraph<Dim> initial_graph(const PicOptions<Dim>& o) {
+tree::CellGraph<Dim> initial_graph(const PicOptions<Dim>& o) {
   LIQUID_VERIFY(o.domain.valid(), "PIC: the domain is empty");
   LIQUID_VERIFY(o.finest_level >= 1 && o.finest_level <= morton::max_level<Dim>,
                 "PIC: fine level {} is outside [1, {}]", o.finest_level, morton::max_level<Dim>);
@@ -107,7 +107,8 @@ AdaptivePic<Dim>::AdaptivePic(const PicOptions<Dim>& options)
     options_.reseeding.lo = 1;  // holes only: a cell is refilled when the step left it empty
     options_.reseeding.hi = std::numeric_limits<int>::max();
   }
-  if (options_.transfer != PicTransfer::rbf) lattice_ = std::make_unique<RegularLattice<Dim>>(graph_);
+  if (options_.transfer != PicTransfer::rbf)
+    lattice_ = std::make_unique<transfer::RegularLattice<Dim>>(graph_);
   if (options_.transfer == PicTransfer::apic) apic_field_ = particles_.add_field("apic", Dim * Dim);
   u_.assign(graph_.face_capacity(), 0.0);
   known_.assign(graph_.face_capacity(), 1);
@@ -136,16 +137,16 @@ void AdaptivePic<Dim>::seed(const levelset::Function<Dim>& liquid,
     graph_ = tree::narrow_band<Dim>(options_.domain, liquid, options_.coarse_level, options_.finest_level,
                                     options_.band + 1.0, graph_options(options_));
   }
-  const VelocitySource<Dim> source = [&](std::span<const Vec<Dim>> x, std::span<const CellId>,
-                                         std::span<Vec<Dim>> v) {
+  const particles::VelocitySource<Dim> source = [&](std::span<const Vec<Dim>> x,
+                                                    std::span<const tree::CellId>, std::span<Vec<Dim>> v) {
     for (std::size_t i = 0; i < x.size(); ++i) v[i] = velocity ? velocity(x[i]) : Vec<Dim>::Zero();
   };
   solid_.clear();  // the tree was rebuilt: classify() evaluates the mask afresh
   const levelset::Function<Dim> region =
       options_.solid ? levelset::subtract<Dim>(liquid, options_.solid) : liquid;
-  const long n = seed_region<Dim>(graph_, region, SeedOptions{}, particles_, source);
+  const long n = particles::seed_region<Dim>(graph_, region, particles::SeedOptions{}, particles_, source);
   LIQUID_VERIFY(n > 0, "PIC: the liquid region holds no cell's sample point: nothing to simulate");
-  bin_particles<Dim>(graph_, particles_.x, bins_);
+  particles::bin_particles<Dim>(graph_, particles_.x, bins_);
   u_.assign(graph_.face_capacity(), 0.0);
   known_.assign(graph_.face_capacity(), 1);
   p_.assign(graph_.cell_capacity(), 0.0);
@@ -165,8 +166,8 @@ void AdaptivePic<Dim>::seed(const levelset::Function<Dim>& liquid,
     // start with less energy than their velocity field, which the first step's transfers restore
     // and which would read as an energy gain.
     particles_.clear();
-    seed_region<Dim>(graph_, region, SeedOptions{}, particles_, source);
-    bin_particles<Dim>(graph_, particles_.x, bins_);
+    particles::seed_region<Dim>(graph_, region, particles::SeedOptions{}, particles_, source);
+    particles::bin_particles<Dim>(graph_, particles_.x, bins_);
     u_.assign(graph_.face_capacity(), 0.0);
     known_.assign(graph_.face_capacity(), 1);
     p_.assign(graph_.cell_capacity(), 0.0);
@@ -206,7 +207,7 @@ PicState<Dim> AdaptivePic<Dim>::state() const {
 template <int Dim>
 void AdaptivePic<Dim>::restore(const PicState<Dim>& s) {
   LIQUID_VERIFY(!seeded_, "PIC: restore() after seed() or a restore()");
-  CellGraph<Dim> graph = CellGraph<Dim>::from_state(s.graph);
+  tree::CellGraph<Dim> graph = tree::CellGraph<Dim>::from_state(s.graph);
   LIQUID_VERIFY(graph.domain().lo == options_.domain.lo && graph.domain().hi == options_.domain.hi,
                 "PIC: the saved state's domain differs from the scene's");
   LIQUID_VERIFY(
@@ -229,7 +230,8 @@ void AdaptivePic<Dim>::restore(const PicState<Dim>& s) {
   graph_ = std::move(graph);
   solid_.clear();
   lattice_.reset();
-  if (options_.transfer != PicTransfer::rbf) lattice_ = std::make_unique<RegularLattice<Dim>>(graph_);
+  if (options_.transfer != PicTransfer::rbf)
+    lattice_ = std::make_unique<transfer::RegularLattice<Dim>>(graph_);
   particles_.resize(static_cast<int>(n));
   for (std::size_t i = 0; i < n; ++i)
     for (int d = 0; d < Dim; ++d) {
@@ -249,7 +251,7 @@ void AdaptivePic<Dim>::restore(const PicState<Dim>& s) {
     LIQUID_VERIFY(apic_field_ >= 0,
                   "PIC: the saved state has no 'apic' particle field for the APIC transfer");
   }
-  for (CellId c : s.particle_cell)
+  for (tree::CellId c : s.particle_cell)
     LIQUID_VERIFY(graph_.alive(c), "PIC: a saved particle is binned in cell {}, which is not a leaf", c);
   bins_.cell = s.particle_cell;
   bins_.sort(graph_.cell_capacity());
@@ -264,16 +266,16 @@ void AdaptivePic<Dim>::restore(const PicState<Dim>& s) {
 }
 
 template <int Dim>
-VelocitySource<Dim> AdaptivePic<Dim>::grid_velocity() const {
-  return [this](std::span<const Vec<Dim>> x, std::span<const CellId> cells, std::span<Vec<Dim>> v) {
-    CellBins b;
+particles::VelocitySource<Dim> AdaptivePic<Dim>::grid_velocity() const {
+  return [this](std::span<const Vec<Dim>> x, std::span<const tree::CellId> cells, std::span<Vec<Dim>> v) {
+    particles::CellBins b;
     b.cell.assign(cells.begin(), cells.end());
     b.sort(graph_.cell_capacity());
     if (lattice_) {
-      linear_to_points<Dim>(*lattice_, u_, x, v);
+      transfer::linear_to_points<Dim>(*lattice_, u_, x, v);
       return;
     }
-    faces_to_points<Dim>(graph_, u_, known_, x, b, options_.rbf, v);
+    transfer::faces_to_points<Dim>(graph_, u_, known_, x, b, options_.rbf, v);
   };
 }
 
@@ -283,7 +285,7 @@ void AdaptivePic<Dim>::classify() {
   // current for the cells it creates, so a step does not evaluate the solid at every cell again.
   if (options_.solid && solid_.empty()) {
     solid_.assign(graph_.cell_capacity(), 0);
-    graph_.for_each_cell([&](CellId c) { solid_[c] = options_.solid(graph_.centre(c)) < 0.0; });
+    graph_.for_each_cell([&](tree::CellId c) { solid_[c] = options_.solid(graph_.centre(c)) < 0.0; });
   }
   pic::classify_cells<Dim>(graph_, bins_, solid_, cls_);
 }
@@ -292,58 +294,61 @@ template <int Dim>
 void AdaptivePic<Dim>::apply_sources(PicStepReport& r) {
   for (const PicSource<Dim>& s : options_.sources) {
     if (!s.active(time_)) continue;
-    std::vector<CellId> cells;
-    graph_.for_each_cell([&](CellId c) {
+    std::vector<tree::CellId> cells;
+    graph_.for_each_cell([&](tree::CellId c) {
       const Vec<Dim> x = graph_.centre(c);
       if (s.region(x) < 0.0 && !(options_.solid && options_.solid(x) < 0.0)) cells.push_back(c);
     });
-    ReseedOptions o = options_.reseeding;
+    particles::ReseedOptions o = options_.reseeding;
     o.fill_empty = true;
     o.hi = std::numeric_limits<int>::max();  // only top up: never thin out what flows through
     const Vec<Dim> v = s.velocity;
-    const VelocitySource<Dim> inflow = [v](std::span<const Vec<Dim>>, std::span<const CellId>,
-                                           std::span<Vec<Dim>> out) { std::fill(out.begin(), out.end(), v); };
-    const ReseedReport rep = liquid::reseed<Dim>(graph_, cells, o, inflow, particles_, bins_);
+    const particles::VelocitySource<Dim> inflow =
+        [v](std::span<const Vec<Dim>>, std::span<const tree::CellId>, std::span<Vec<Dim>> out) {
+          std::fill(out.begin(), out.end(), v);
+        };
+    const particles::ReseedReport rep = particles::reseed<Dim>(graph_, cells, o, inflow, particles_, bins_);
     r.n_source += rep.created - rep.deleted;
-    for (CellId c : cells)
+    for (tree::CellId c : cells)
       for (std::int32_t i : bins_.of(c))
         if (s.region(particles_.x[i]) < 0.0) particles_.v[i] = v;
   }
 }
 
 template <int Dim>
-void AdaptivePic<Dim>::fill(std::span<const CellId> cells, PicStepReport& r) {
+void AdaptivePic<Dim>::fill(std::span<const tree::CellId> cells, PicStepReport& r) {
   if (cells.empty()) return;
-  ReseedOptions o = options_.reseeding;
+  particles::ReseedOptions o = options_.reseeding;
   o.fill_empty = true;
-  const ReseedReport rep = liquid::reseed<Dim>(graph_, cells, o, grid_velocity(), particles_, bins_);
+  const particles::ReseedReport rep =
+      particles::reseed<Dim>(graph_, cells, o, grid_velocity(), particles_, bins_);
   r.n_filled += rep.created - rep.deleted;
 }
 
 template <int Dim>
 void AdaptivePic<Dim>::adapt_grid(PicStepReport& r) {
-  MarkList marks;
+  tree::MarkList marks;
   // Active sources are kept fine like the surface: the liquid they create starts in the band. A
   // cell counts when the source may overlap it (level set within half its diagonal of the centre),
   // so that a source smaller than the coarse air cells around it is found and refined down to.
-  std::vector<CellId> centres = cls_.surface;
+  std::vector<tree::CellId> centres = cls_.surface;
   for (const PicSource<Dim>& s : options_.sources)
     if (s.active(time_))
-      graph_.for_each_cell([&](CellId c) {
+      graph_.for_each_cell([&](tree::CellId c) {
         if (s.region(graph_.centre(c)) < 0.5 * graph_.cell_size(c).norm() && !cls_.is_solid(c))
           centres.push_back(c);
       });
   if (options_.refine)
-    graph_.for_each_cell([&](CellId c) {
+    graph_.for_each_cell([&](tree::CellId c) {
       if (options_.refine(graph_.centre(c)) < 0.5 * graph_.cell_size(c).norm()) centres.push_back(c);
     });
   // So is the liquid's contact with a solid, two hops wider than the band: no RBF-FD row then
   // reaches a solid cell, where fold_solid_rows() is only first order (a still pool around a
   // submerged box then stays still; docs/findings/pic-solver.md).
   if (!solid_.empty()) {
-    std::vector<CellId> ring;
-    for (CellId c : cls_.fluid)
-      for (FaceId f : graph_.faces(c))
+    std::vector<tree::CellId> ring;
+    for (tree::CellId c : cls_.fluid)
+      for (tree::FaceId f : graph_.faces(c))
         if (cls_.solid_face(graph_.face(f))) {
           graph_.k_ring(c, 2, ring);
           centres.insert(centres.end(), ring.begin(), ring.end());
@@ -354,27 +359,27 @@ void AdaptivePic<Dim>::adapt_grid(PicStepReport& r) {
   if (marks.empty()) return;
   // Interior fluid cells about to split: their empty children are liquid and get particles.
   std::vector<std::uint8_t> interior(graph_.cell_capacity(), 0);
-  for (CellId c : cls_.fluid) interior[c] = 1;
-  for (CellId c : cls_.surface) interior[c] = 0;
-  const AdaptReport report = graph_.adapt(marks);
+  for (tree::CellId c : cls_.fluid) interior[c] = 1;
+  for (tree::CellId c : cls_.surface) interior[c] = 0;
+  const tree::AdaptReport report = graph_.adapt(marks);
   r.n_split += report.n_split;
   r.n_merged += report.n_merged;
   if (report.empty()) return;
-  remap::face_field(graph_, report, u_);
+  tree::remap::face_field(graph_, report, u_);
   std::vector<double> known(known_.begin(), known_.end());
-  remap::face_field(graph_, report, known);
+  tree::remap::face_field(graph_, report, known);
   known_.resize(known.size());
   for (std::size_t f = 0; f < known.size(); ++f) known_[f] = known[f] > 0.5;
-  remap::cell_field(graph_, report, p_);
+  tree::remap::cell_field(graph_, report, p_);
   if (!solid_.empty()) {
     solid_.resize(graph_.cell_capacity(), 0);
-    for (CellId c : report.new_cells) solid_[c] = options_.solid(graph_.centre(c)) < 0.0;
+    for (tree::CellId c : report.new_cells) solid_[c] = options_.solid(graph_.centre(c)) < 0.0;
   }
-  rebin<Dim>(graph_, particles_.x, bins_, &report);
-  std::vector<CellId> children;
-  const Origins& o = report.cell_origins;
+  particles::rebin<Dim>(graph_, particles_.x, bins_, &report);
+  std::vector<tree::CellId> children;
+  const tree::Origins& o = report.cell_origins;
   for (std::size_t n = 0; n < report.new_cells.size(); ++n) {
-    const CellId c = report.new_cells[n];
+    const tree::CellId c = report.new_cells[n];
     if (o.begin[n + 1] - o.begin[n] == 1 && interior[o.source[o.begin[n]]] && bins_.count(c) == 0)
       children.push_back(c);
   }
@@ -384,13 +389,14 @@ void AdaptivePic<Dim>::adapt_grid(PicStepReport& r) {
 
 template <int Dim>
 void AdaptivePic<Dim>::to_faces(PicStepReport& r) {
-  FaceValues faces;
+  transfer::FaceValues faces;
   if (lattice_)
-    r.p2g = linear_to_faces<Dim>(
+    r.p2g = transfer::linear_to_faces<Dim>(
         graph_, *lattice_, particles_, bins_,
-        options_.transfer == PicTransfer::apic ? RegularScheme::apic : RegularScheme::pic, {}, faces);
+        options_.transfer == PicTransfer::apic ? transfer::RegularScheme::apic : transfer::RegularScheme::pic,
+        {}, faces);
   else
-    r.p2g = particles_to_faces<Dim>(graph_, particles_, bins_, options_.rbf, faces);
+    r.p2g = transfer::particles_to_faces<Dim>(graph_, particles_, bins_, options_.rbf, faces);
   r.unknown_faces = r.p2g.empty;
   // The transfer's masses are unit particle masses times weights: a full cell's seeded particles
   // (2^Dim) weigh 2^Dim on each of its faces. Kept for every regular transfer (pressure_work; the
@@ -404,7 +410,7 @@ void AdaptivePic<Dim>::to_faces(PicStepReport& r) {
   }
   u_ = std::move(faces.value);
   known_ = std::move(faces.known);
-  extrapolate_faces<Dim>(graph_, options_.extrapolation_layers, u_, known_);
+  transfer::extrapolate_faces<Dim>(graph_, options_.extrapolation_layers, u_, known_);
   u_transferred_ = u_;
   check_faces("p2g");
 }
@@ -416,8 +422,8 @@ void AdaptivePic<Dim>::forces(double dt) {
   // the projection brings the wall faces back to 0 (see assemble()).
   // Solids are at rest and take no gravity: their faces are 0, and the PPE rows beside them have no
   // flux through them (see fold_solid_rows()).
-  graph_.for_each_face([&](FaceId f) {
-    const GraphFace& g = graph_.face(f);
+  graph_.for_each_face([&](tree::FaceId f) {
+    const tree::GraphFace& g = graph_.face(f);
     u_[f] = cls_.solid_face(g) ? 0.0 : (g.is_boundary() ? 0.0 : u_[f]) + dt * options_.gravity[g.axis];
   });
   check_faces("forces");
@@ -429,8 +435,8 @@ void AdaptivePic<Dim>::project_gravity(double dt, PicStepReport& r) {
   // hydrostatic one wherever the liquid is at rest), is added back to the transferred velocity,
   // which the mass projection then projects.
   std::vector<double> kick(u_.size(), 0.0);
-  graph_.for_each_face([&](FaceId f) {
-    const GraphFace& g = graph_.face(f);
+  graph_.for_each_face([&](tree::FaceId f) {
+    const tree::GraphFace& g = graph_.face(f);
     if (!cls_.solid_face(g)) kick[f] = dt * options_.gravity[g.axis];
   });
   std::vector<double> rest(u_.size());
@@ -467,26 +473,26 @@ void AdaptivePic<Dim>::assemble(double dt) {
       surface_ = std::make_unique<pic::ParticleSurface<Dim>>(graph_, cls_, particles_.x,
                                                              options_.finest_level, options_.surface_radius);
     std::vector<std::uint8_t> seen(graph_.cell_capacity(), 0);
-    const auto consider = [&](CellId c) {
+    const auto consider = [&](tree::CellId c) {
       if (seen[c] || cls_.is_solid(c)) return;
       seen[c] = 1;
       if ((*surface_)(graph_.centre(c)) < 0.0) problem.boundary.unknown_cells[c] = 1;
     };
     // Two hops out, so that no unknown has a neighbour with a negative centre left outside (the
     // PPE needs a sign change on every edge it cuts).
-    std::vector<CellId> ring;
-    for (CellId c : cls_.fluid) {
+    std::vector<tree::CellId> ring;
+    for (tree::CellId c : cls_.fluid) {
       graph_.k_ring(c, 2, ring);
-      for (CellId n : ring) consider(n);
+      for (tree::CellId n : ring) consider(n);
     }
-    graph_.for_each_cell([&](CellId c) {
+    graph_.for_each_cell([&](tree::CellId c) {
       if (problem.boundary.unknown_cells[c]) problem.f_cells[c] = div[c] / dt;
     });
     // Every solid cell is an unknown (decoupled by fold_solid_rows()), and the level set is
     // negative inside the solid, so that each edge the PPE cuts has a sign change on it: a solid
     // cell left outside had none towards its solid neighbours (seen on dam-break-obstacles-3d).
     if (!solid_.empty()) {
-      graph_.for_each_cell([&](CellId c) {
+      graph_.for_each_cell([&](tree::CellId c) {
         if (cls_.is_solid(c)) problem.boundary.unknown_cells[c] = 1;
       });
       problem.boundary.levelset = [s = surface_.get(), solid = options_.solid](const Vec<Dim>& x) {
@@ -497,7 +503,7 @@ void AdaptivePic<Dim>::assemble(double dt) {
     }
   } else {
     surface_.reset();
-    for (CellId c : cls_.fluid) {
+    for (tree::CellId c : cls_.fluid) {
       problem.f_cells[c] = div[c] / dt;
       problem.boundary.unknown_cells[c] = 1;
     }
@@ -505,17 +511,17 @@ void AdaptivePic<Dim>::assemble(double dt) {
   // Solid cells within two face hops of the liquid are unknowns too, so that no row sees them as
   // air (p = 0); fold_solid_rows() then decouples them.
   if (!solid_.empty()) {
-    std::vector<CellId> frontier, next;
-    graph_.for_each_cell([&](CellId c) {
+    std::vector<tree::CellId> frontier, next;
+    graph_.for_each_cell([&](tree::CellId c) {
       if (problem.boundary.unknown_cells[c]) frontier.push_back(c);
     });
     for (int hop = 0; hop < 2; ++hop) {
       next.clear();
-      for (CellId c : frontier)
-        for (FaceId f : graph_.faces(c)) {
-          const GraphFace& g = graph_.face(f);
-          const CellId n = g.cell[0] == c ? g.cell[1] : g.cell[0];
-          if (n != no_cell && cls_.is_solid(n) && !problem.boundary.unknown_cells[n])
+      for (tree::CellId c : frontier)
+        for (tree::FaceId f : graph_.faces(c)) {
+          const tree::GraphFace& g = graph_.face(f);
+          const tree::CellId n = g.cell[0] == c ? g.cell[1] : g.cell[0];
+          if (n != tree::no_cell && cls_.is_solid(n) && !problem.boundary.unknown_cells[n])
             problem.boundary.unknown_cells[n] = 1, next.push_back(n);
         }
       frontier.swap(next);
@@ -532,8 +538,8 @@ void AdaptivePic<Dim>::assemble(double dt) {
     for (int k = 0; k < Dim; ++k)
       if (n[k] != 0.0) axis = k;
     const int side = 2 * axis + (n[axis] > 0 ? 1 : 0);
-    const CellId c = graph_.locate(Vec<Dim>(x - nudge * n));
-    for (FaceId f : graph_.faces(c))
+    const tree::CellId c = graph_.locate(Vec<Dim>(x - nudge * n));
+    for (tree::FaceId f : graph_.faces(c))
       if (graph_.face(f).boundary == side) return n[axis] * u_[f] / dt;
     return 0.0;
   };
@@ -577,8 +583,8 @@ void AdaptivePic<Dim>::interface_gradients(double, std::vector<double>& dn) cons
   // 2002), d the distance between the centres along the axis. Second order in the surface position.
   const auto& layout = system_.layout;
   const linalg::Vector& p = system_.b;
-  graph_.for_each_face([&](FaceId f) {
-    const GraphFace& g = graph_.face(f);
+  graph_.for_each_face([&](tree::FaceId f) {
+    const tree::GraphFace& g = graph_.face(f);
     if (g.is_boundary() || std::isfinite(dn[f]) || cls_.solid_face(g)) return;
     const int i0 = layout.dof_of_cell[g.cell[0]], i1 = layout.dof_of_cell[g.cell[1]];
     if ((i0 >= 0) == (i1 >= 0)) return;
@@ -606,14 +612,14 @@ void AdaptivePic<Dim>::extend_into_solid(linalg::Vector& x) const {
   for (int sweep = 0; sweep < 2; ++sweep) {
     std::vector<std::pair<long, double>> update;
     for (long i = 0; i < system_.n_unknowns(); ++i) {
-      const CellId c = layout.cell_of_dof[i];
+      const tree::CellId c = layout.cell_of_dof[i];
       if (!cls_.is_solid(c) || set[c]) continue;
       double sum = 0.0;
       int n = 0;
-      for (FaceId f : graph_.faces(c)) {
-        const GraphFace& g = graph_.face(f);
-        const CellId q = g.cell[0] == c ? g.cell[1] : g.cell[0];
-        if (q != no_cell && set[q] && layout.is_unknown(q)) sum += x[layout.dof_of_cell[q]], ++n;
+      for (tree::FaceId f : graph_.faces(c)) {
+        const tree::GraphFace& g = graph_.face(f);
+        const tree::CellId q = g.cell[0] == c ? g.cell[1] : g.cell[0];
+        if (q != tree::no_cell && set[q] && layout.is_unknown(q)) sum += x[layout.dof_of_cell[q]], ++n;
       }
       if (n > 0) update.emplace_back(i, sum / n);
     }
@@ -653,8 +659,8 @@ double AdaptivePic<Dim>::project(double dt) {
   const bool in_volumes = options_.projection == PicProjection::volume;
   const bool has_masses = face_mass_.size() == u_.size();
   double work = has_masses ? 0.0 : std::numeric_limits<double>::quiet_NaN();
-  graph_.for_each_face([&](FaceId f) {
-    const GraphFace& g = graph_.face(f);
+  graph_.for_each_face([&](tree::FaceId f) {
+    const tree::GraphFace& g = graph_.face(f);
     if (g.is_boundary() || cls_.solid_face(g)) {
       u_[f] = 0.0;
       known_[f] = 1;
@@ -680,8 +686,8 @@ double AdaptivePic<Dim>::project(double dt) {
 template <int Dim>
 double AdaptivePic<Dim>::grid_energy() const {
   double sum = 0.0;
-  graph_.for_each_face([&](FaceId f) {
-    const GraphFace& g = graph_.face(f);
+  graph_.for_each_face([&](tree::FaceId f) {
+    const tree::GraphFace& g = graph_.face(f);
     if (g.is_boundary() || !cls_.wet(g)) return;
     const double d = std::abs(graph_.centre(g.cell[1])[g.axis] - graph_.centre(g.cell[0])[g.axis]);
     // The mass projection's norm: each face's volume times its mass over a full cell's (1 / beta).
@@ -693,7 +699,7 @@ double AdaptivePic<Dim>::grid_energy() const {
 
 template <int Dim>
 void AdaptivePic<Dim>::extrapolate() {
-  extrapolate_faces<Dim>(graph_, options_.extrapolation_layers, u_, known_);
+  transfer::extrapolate_faces<Dim>(graph_, options_.extrapolation_layers, u_, known_);
 }
 
 template <int Dim>
@@ -703,20 +709,20 @@ void AdaptivePic<Dim>::to_particles(PicStepReport& r) {
   if (lattice_) {
     std::span<double> affine;
     if (options_.transfer == PicTransfer::apic) affine = particles_.field(apic_field_);
-    r.g2p = linear_to_points<Dim>(*lattice_, u_, particles_.x, grid, affine);
+    r.g2p = transfer::linear_to_points<Dim>(*lattice_, u_, particles_.x, grid, affine);
   } else {
     // One RBF field serves g2p and the advection after it: each cell's interpolants are factorised
     // once a step instead of twice (the same stencils and values as faces_to_points).
-    std::vector<CellId> cells;  // where particles are, and one ring around
+    std::vector<tree::CellId> cells;  // where particles are, and one ring around
     std::vector<std::uint8_t> seen(graph_.cell_capacity(), 0);
-    std::vector<CellId> ring;
-    for (CellId c : cls_.fluid) {
+    std::vector<tree::CellId> ring;
+    for (tree::CellId c : cls_.fluid) {
       graph_.k_ring(c, 1, ring);
-      for (CellId q : ring)
+      for (tree::CellId q : ring)
         if (!seen[q]) seen[q] = 1, cells.push_back(q);
     }
     std::sort(cells.begin(), cells.end());
-    field_ = std::make_unique<FaceVelocityField<Dim>>(graph_, u_, known_, options_.rbf, cells);
+    field_ = std::make_unique<transfer::FaceVelocityField<Dim>>(graph_, u_, known_, options_.rbf, cells);
     parallel_for(
         static_cast<long>(n), [&](long i) { grid[i] = (*field_)(particles_.x[i]); }, 1024);
     r.g2p.targets = static_cast<long>(n) * Dim;
@@ -725,8 +731,8 @@ void AdaptivePic<Dim>::to_particles(PicStepReport& r) {
     std::vector<double> du(u_.size());
     for (std::size_t f = 0; f < u_.size(); ++f) du[f] = u_[f] - u_transferred_[f];
     std::vector<Vec<Dim>> delta(n);
-    linear_to_points<Dim>(*lattice_, du, particles_.x, delta);
-    flip_blend<Dim>(grid, delta, options_.flip, particles_.v);
+    transfer::linear_to_points<Dim>(*lattice_, du, particles_.x, delta);
+    transfer::flip_blend<Dim>(grid, delta, options_.flip, particles_.v);
   } else {
     particles_.v = std::move(grid);
   }
@@ -747,38 +753,38 @@ void AdaptivePic<Dim>::advect(double dt, PicStepReport& r) {
   r.n_substeps = n_sub;
   const auto run = [&](const auto& field) {
     for (int s = 0; s < n_sub; ++s) {
-      const AdvectReport a = liquid::advect<Dim>(particles_.x, dt / n_sub, options_.integrator, field,
-                                                 graph_.domain(), options_.solid);
+      const particles::AdvectReport a = particles::advect<Dim>(particles_.x, dt / n_sub, options_.integrator,
+                                                               field, graph_.domain(), options_.solid);
       r.advect.clamped += a.clamped;
       r.advect.pushed += a.pushed;
       r.advect.stuck += a.stuck;
     }
   };
   if (lattice_) {
-    run(FaceVelocityField<Dim>(graph_, *lattice_, u_));
+    run(transfer::FaceVelocityField<Dim>(graph_, *lattice_, u_));
   } else {
     run(*field_);  // built by g2p from the same face velocities
   }
-  rebin<Dim>(graph_, particles_.x, bins_);
+  particles::rebin<Dim>(graph_, particles_.x, bins_);
   check_particles("advect");
 }
 
 template <int Dim>
 void AdaptivePic<Dim>::reseed(PicStepReport& r) {
   classify();
-  std::vector<CellId> interior;
+  std::vector<tree::CellId> interior;
   std::set_difference(cls_.fluid.begin(), cls_.fluid.end(), cls_.surface.begin(), cls_.surface.end(),
                       std::back_inserter(interior));
   // Holes opened by this step's advection are refilled with the rest.
-  ReseedOptions o = options_.reseeding;
+  particles::ReseedOptions o = options_.reseeding;
   o.fill_empty = true;
-  r.reseed = liquid::reseed<Dim>(graph_, interior, o, grid_velocity(), particles_, bins_);
+  r.reseed = particles::reseed<Dim>(graph_, interior, o, grid_velocity(), particles_, bins_);
   if (options_.solid) {  // a new particle in the solid part of a fluid cell is pushed out at once
     const double eps = 1e-6 * graph_.domain().size().maxCoeff();
     long moved = 0;
     for (int i = particles_.size() - static_cast<int>(r.reseed.created); i < particles_.size(); ++i)
-      moved += detail::push_out<Dim>(options_.solid, eps, particles_.x[i]) > 0;
-    if (moved > 0) rebin<Dim>(graph_, particles_.x, bins_);
+      moved += particles::detail::push_out<Dim>(options_.solid, eps, particles_.x[i]) > 0;
+    if (moved > 0) particles::rebin<Dim>(graph_, particles_.x, bins_);
     r.advect.pushed += moved;
   }
   // New particles start with a zero affine part (APIC): fields of new particles are zero.
@@ -852,7 +858,7 @@ double AdaptivePic<Dim>::stable_dt(double cfl, double max_dt) const {
 
 template <int Dim>
 void AdaptivePic<Dim>::check_faces(const char* phase) const {
-  graph_.for_each_face([&](FaceId f) {
+  graph_.for_each_face([&](tree::FaceId f) {
     if (!std::isfinite(u_[f])) {
       const Vec<Dim> x = graph_.face_centre(f);
       throw Error(fmt::format("step {}, phase {}: face velocity {} at face {} (centre ({:.6g}))", step_,
@@ -875,4 +881,4 @@ void AdaptivePic<Dim>::check_particles(const char* phase) const {
 template class AdaptivePic<2>;
 template class AdaptivePic<3>;
 
-}  // namespace liquid
+}  // namespace liquid::pic

@@ -38,7 +38,7 @@
 #include "liquid/transfer/scattered.hpp"
 #include "liquid/transfer/velocity_field.hpp"
 
-namespace liquid {
+namespace liquid::pic {
 
 /// How velocity moves between particles and faces: rbf (the paper's, any tree), or the regular
 /// baselines pic, flip and apic (multilinear weights; a uniform tree, adaptive = false).
@@ -103,14 +103,14 @@ struct PicOptions {
   levelset::Function<Dim> refine;
   PicTransfer transfer = PicTransfer::rbf;
   double flip = 0.95;  ///< FLIP's blend for transfer = flip (1: pure FLIP, 0: PIC)
-  TransferOptions rbf = stable_rbf();
-  Integrator integrator = Integrator::rk2;
+  transfer::TransferOptions rbf = stable_rbf();
+  particles::Integrator integrator = particles::Integrator::rk2;
   double advect_cfl = 1.0;  ///< advection substeps keep |v| dt_sub <= advect_cfl * finest h
   int extrapolation_layers = 4;
   bool reseed = true;
   /// Ranges left at 0 take the method's default: holes only (lo 1, no hi) with the RBF transfer,
   /// [3, 12] (2D) and [5, 15] (3D) with PIC, FLIP and APIC.
-  ReseedOptions reseeding;
+  particles::ReseedOptions reseeding;
   mac::PoissonOptions poisson = paper_poisson();
   linalg::SolveOptions solver{linalg::SolverKind::bicgstab_ilut, 1e-8};
   bool continue_on_ppe_failure = false;  ///< false: a PPE that does not converge stops the run
@@ -141,8 +141,8 @@ struct PicOptions {
   /// r^5 + degree 2 pair amplifies noise on 3D trees until a still pool moves; clamping keeps the
   /// interpolant's extrapolation at free-surface and hanging faces from feeding on itself. Why:
   /// docs/findings/transfer-stability.md.
-  static TransferOptions stable_rbf() {
-    TransferOptions t = TransferOptions::paper_rbf();
+  static transfer::TransferOptions stable_rbf() {
+    transfer::TransferOptions t = transfer::TransferOptions::paper_rbf();
     t.exponent = 3;
     t.degree = 1;
     t.clamp_faces = true;
@@ -183,7 +183,7 @@ struct PicStepReport {
   int n_substeps = 1;
   linalg::SolveStats ppe;
   linalg::SolveStats ppe_gravity;  ///< PicProjection::split: the gravity pass's solve (ppe: the mass pass's)
-  TransferReport p2g, g2p;
+  transfer::TransferReport p2g, g2p;
   long unknown_faces = 0;  ///< faces no particle reached, before extrapolation
   /// Kinetic energy of the face velocities over the wet faces, 1/2 sum of u_f^2 A_f d_f (d_f the
   /// distance between the two cell centres along the axis; density 1), before the projection (after
@@ -202,21 +202,21 @@ struct PicStepReport {
   /// it bounds a PIC step's rise of the particles' energy (the kinetic-energy case asserts it; see
   /// docs/findings/energy-and-projections.md). Regular transfers only (their face masses); NaN with RBF.
   double pressure_work = std::numeric_limits<double>::quiet_NaN();
-  AdvectReport advect;
-  ReseedReport reseed;
+  particles::AdvectReport advect;
+  particles::ReseedReport reseed;
 };
 
 /// Everything that decides the solver's future: what a checkpoint stores. Positions and velocities
 /// are Dim doubles per particle; fields as the particles hold them.
 template <int Dim>
 struct PicState {
-  CellGraphState<Dim> graph;
+  tree::CellGraphState<Dim> graph;
   std::vector<double> x, v;
   std::vector<std::string> field_names;
   std::vector<int> field_components;
   std::vector<std::vector<double>> field_values;
-  std::vector<CellId> particle_cell;  ///< the bins
-  std::vector<double> u, p;           ///< face velocities and cell pressures by id
+  std::vector<tree::CellId> particle_cell;  ///< the bins
+  std::vector<double> u, p;                 ///< face velocities and cell pressures by id
   std::vector<std::uint8_t> known;
   double time = 0.0;
   long step = 0;
@@ -246,9 +246,9 @@ class AdaptivePic {
   double stable_dt(double cfl, double max_dt) const;
 
   const PicOptions<Dim>& options() const { return options_; }
-  const CellGraph<Dim>& graph() const { return graph_; }
-  const Particles<Dim>& particles() const { return particles_; }
-  const CellBins& bins() const { return bins_; }
+  const tree::CellGraph<Dim>& graph() const { return graph_; }
+  const particles::Particles<Dim>& particles() const { return particles_; }
+  const particles::CellBins& bins() const { return bins_; }
   const pic::Classification& classification() const { return cls_; }
   /// Face velocities after the last step (normal components, by face id) and which are known.
   std::span<const double> face_velocity() const { return u_; }
@@ -270,7 +270,7 @@ class AdaptivePic {
   void interface_gradients(double dt, std::vector<double>& dn) const;
   void extend_into_solid(linalg::Vector& x) const;
   void adapt_grid(PicStepReport& r);
-  void fill(std::span<const CellId> cells, PicStepReport& r);
+  void fill(std::span<const tree::CellId> cells, PicStepReport& r);
   void to_faces(PicStepReport& r);
   void forces(double dt);
   void assemble(double dt);
@@ -285,16 +285,16 @@ class AdaptivePic {
   void to_particles(PicStepReport& r);
   void advect(double dt, PicStepReport& r);
   void reseed(PicStepReport& r);
-  VelocitySource<Dim> grid_velocity() const;
+  particles::VelocitySource<Dim> grid_velocity() const;
   void check_faces(const char* phase) const;
   void check_particles(const char* phase) const;
 
   PicOptions<Dim> options_;
-  CellGraph<Dim> graph_;
-  std::unique_ptr<RegularLattice<Dim>> lattice_;   // the multilinear transfers (pic, flip, apic)
-  std::unique_ptr<FaceVelocityField<Dim>> field_;  // the RBF velocity of this step (g2p, advect)
-  Particles<Dim> particles_;
-  CellBins bins_;
+  tree::CellGraph<Dim> graph_;
+  std::unique_ptr<transfer::RegularLattice<Dim>> lattice_;   // the multilinear transfers (pic, flip, apic)
+  std::unique_ptr<transfer::FaceVelocityField<Dim>> field_;  // the RBF velocity of this step (g2p, advect)
+  particles::Particles<Dim> particles_;
+  particles::CellBins bins_;
   pic::Classification cls_;
   std::unique_ptr<pic::ParticleSurface<Dim>> surface_;  // the step's liquid level set (levelset surface)
   std::vector<std::uint8_t> solid_;  // per cell id: centre inside the solid (empty: no solid)
@@ -323,4 +323,4 @@ class AdaptivePic {
 extern template class AdaptivePic<2>;
 extern template class AdaptivePic<3>;
 
-}  // namespace liquid
+}  // namespace liquid::pic

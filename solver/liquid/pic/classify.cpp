@@ -8,41 +8,41 @@
 namespace liquid::pic {
 
 template <int Dim>
-void classify_cells(const CellGraph<Dim>& graph, const CellBins& bins, std::span<const std::uint8_t> solid,
-                    Classification& out) {
+void classify_cells(const tree::CellGraph<Dim>& graph, const particles::CellBins& bins,
+                    std::span<const std::uint8_t> solid, Classification& out) {
   const int cap = graph.cell_capacity();
   LIQUID_VERIFY(solid.empty() || solid.size() >= static_cast<std::size_t>(cap),
                 "classify_cells: solid mask has {} entries for {} cell ids", solid.size(), cap);
   out.type.assign(cap, CellType::air);
   out.fluid.clear(), out.surface.clear(), out.filled.clear();
-  graph.for_each_cell([&](CellId c) {
+  graph.for_each_cell([&](tree::CellId c) {
     if (!solid.empty() && solid[c])
       out.type[c] = CellType::solid;
     else if (bins.count(c) > 0)
       out.type[c] = CellType::fluid;
   });
   // Holes: empty cells surrounded by fluid (or walls, or solid).
-  graph.for_each_cell([&](CellId c) {
+  graph.for_each_cell([&](tree::CellId c) {
     if (out.type[c] != CellType::air) return;
     bool enclosed = true;
-    for (FaceId f : graph.faces(c)) {
-      const GraphFace& g = graph.face(f);
-      const CellId n = g.cell[0] == c ? g.cell[1] : g.cell[0];
-      if (n != no_cell && out.type[n] == CellType::air) {
+    for (tree::FaceId f : graph.faces(c)) {
+      const tree::GraphFace& g = graph.face(f);
+      const tree::CellId n = g.cell[0] == c ? g.cell[1] : g.cell[0];
+      if (n != tree::no_cell && out.type[n] == CellType::air) {
         enclosed = false;
         break;
       }
     }
     if (enclosed) out.filled.push_back(c);
   });
-  for (CellId c : out.filled) out.type[c] = CellType::fluid;
-  graph.for_each_cell([&](CellId c) {
+  for (tree::CellId c : out.filled) out.type[c] = CellType::fluid;
+  graph.for_each_cell([&](tree::CellId c) {
     if (out.type[c] != CellType::fluid) return;
     out.fluid.push_back(c);
-    for (FaceId f : graph.faces(c)) {
-      const GraphFace& g = graph.face(f);
-      const CellId n = g.cell[0] == c ? g.cell[1] : g.cell[0];
-      if (n != no_cell && out.type[n] == CellType::air) {
+    for (tree::FaceId f : graph.faces(c)) {
+      const tree::GraphFace& g = graph.face(f);
+      const tree::CellId n = g.cell[0] == c ? g.cell[1] : g.cell[0];
+      if (n != tree::no_cell && out.type[n] == CellType::air) {
         out.surface.push_back(c);
         break;
       }
@@ -51,30 +51,30 @@ void classify_cells(const CellGraph<Dim>& graph, const CellBins& bins, std::span
 }
 
 template <int Dim>
-void mark_band(const CellGraph<Dim>& graph, std::span<const CellId> centres, int band, int coarse_level,
-               int fine_level, MarkList& marks) {
+void mark_band(const tree::CellGraph<Dim>& graph, std::span<const tree::CellId> centres, int band,
+               int coarse_level, int fine_level, tree::MarkList& marks) {
   LIQUID_VERIFY(band >= 0 && coarse_level >= 0 && coarse_level <= fine_level,
                 "mark_band: band {} and levels {} <= {} are not valid", band, coarse_level, fine_level);
   marks.clear();
   // Breadth first from the surface, `band` hops deep.
   std::vector<std::uint8_t> near(graph.cell_capacity(), 0);
-  std::vector<CellId> frontier, next;
-  for (CellId c : centres)
+  std::vector<tree::CellId> frontier, next;
+  for (tree::CellId c : centres)
     if (!near[c]) near[c] = 1, frontier.push_back(c);
   for (int hop = 0; hop < band && !frontier.empty(); ++hop) {
     next.clear();
-    for (CellId c : frontier)
-      for (FaceId f : graph.faces(c)) {
-        const GraphFace& g = graph.face(f);
-        const CellId n = g.cell[0] == c ? g.cell[1] : g.cell[0];
-        if (n != no_cell && !near[n]) {
+    for (tree::CellId c : frontier)
+      for (tree::FaceId f : graph.faces(c)) {
+        const tree::GraphFace& g = graph.face(f);
+        const tree::CellId n = g.cell[0] == c ? g.cell[1] : g.cell[0];
+        if (n != tree::no_cell && !near[n]) {
           near[n] = 1;
           next.push_back(n);
         }
       }
     frontier.swap(next);
   }
-  graph.for_each_cell([&](CellId c) {
+  graph.for_each_cell([&](tree::CellId c) {
     const int target = near[c] ? fine_level : coarse_level;
     if (graph.level(c) < target)
       marks.split.push_back(c);
@@ -83,11 +83,13 @@ void mark_band(const CellGraph<Dim>& graph, std::span<const CellId> centres, int
   });
 }
 
-template void classify_cells<2>(const CellGraph<2>&, const CellBins&, std::span<const std::uint8_t>,
-                                Classification&);
-template void classify_cells<3>(const CellGraph<3>&, const CellBins&, std::span<const std::uint8_t>,
-                                Classification&);
-template void mark_band<2>(const CellGraph<2>&, std::span<const CellId>, int, int, int, MarkList&);
-template void mark_band<3>(const CellGraph<3>&, std::span<const CellId>, int, int, int, MarkList&);
+template void classify_cells<2>(const tree::CellGraph<2>&, const particles::CellBins&,
+                                std::span<const std::uint8_t>, Classification&);
+template void classify_cells<3>(const tree::CellGraph<3>&, const particles::CellBins&,
+                                std::span<const std::uint8_t>, Classification&);
+template void mark_band<2>(const tree::CellGraph<2>&, std::span<const tree::CellId>, int, int, int,
+                           tree::MarkList&);
+template void mark_band<3>(const tree::CellGraph<3>&, std::span<const tree::CellId>, int, int, int,
+                           tree::MarkList&);
 
 }  // namespace liquid::pic

@@ -7,7 +7,7 @@
 namespace liquid::pic {
 
 template <int Dim>
-ParticleSurface<Dim>::ParticleSurface(const CellGraph<Dim>& graph, const Classification& cls,
+ParticleSurface<Dim>::ParticleSurface(const tree::CellGraph<Dim>& graph, const Classification& cls,
                                       std::span<const Vec<Dim>> x, int fine_level, double radius)
     : graph_(&graph), cls_(&cls), fine_level_(fine_level) {
   LIQUID_VERIFY(radius > 0.0 && radius < 2.0, "particle surface: radius {} h is outside (0, 2)", radius);
@@ -34,7 +34,7 @@ std::uint64_t ParticleSurface<Dim>::bucket_key(const IVec<Dim>& b) const {
 
 template <int Dim>
 double ParticleSurface<Dim>::operator()(const Vec<Dim>& x) const {
-  const CellId c = graph_->locate(x);
+  const tree::CellId c = graph_->locate(x);
   if (cls_->is_fluid(c) && graph_->level(c) < fine_level_) return -0.5 * graph_->cell_size(c).minCoeff();
   const IVec<Dim> b = bucket_of(x);
   Vec<Dim> sum = Vec<Dim>::Zero();

@@ -21,7 +21,7 @@ template <int Dim>
 class ParticleSurface {
  public:
   /// `graph`, `cls` must outlive the surface; the positions are copied into a bucket grid of size R.
-  ParticleSurface(const CellGraph<Dim>& graph, const Classification& cls, std::span<const Vec<Dim>> x,
+  ParticleSurface(const tree::CellGraph<Dim>& graph, const Classification& cls, std::span<const Vec<Dim>> x,
                   int fine_level, double radius);
 
   double operator()(const Vec<Dim>& x) const;
@@ -31,7 +31,7 @@ class ParticleSurface {
   std::uint64_t bucket_key(const IVec<Dim>& b) const;
   IVec<Dim> bucket_of(const Vec<Dim>& x) const;
 
-  const CellGraph<Dim>* graph_;
+  const tree::CellGraph<Dim>* graph_;
   const Classification* cls_;
   int fine_level_;
   double h_, support_, radius_;

@@ -11,7 +11,7 @@
 #include "liquid/io/series.hpp"
 #include "liquid/scene/runner.hpp"
 
-namespace liquid::detail {
+namespace liquid::scene::detail {
 
 /// The next step: the solver's stable step clamped to [dt_min, dt_max], landing on the end time (no
 /// sliver step after it) when the run goes by time.
@@ -36,4 +36,4 @@ void get_run_settings(const io::ArchiveReader& r, RunSettings& settings);
 void put_series(io::ArchiveWriter& w, const io::SeriesWriter* series);
 std::vector<io::SeriesFrame> get_series(const io::ArchiveReader& r);
 
-}  // namespace liquid::detail
+}  // namespace liquid::scene::detail

@@ -15,7 +15,7 @@
 #include "liquid/io/tree_output.hpp"
 #include "liquid/scene/checkpoint_detail.hpp"
 
-namespace liquid {
+namespace liquid::scene {
 
 namespace {
 
@@ -143,15 +143,15 @@ int checkpoint_dimension(const std::string& path) {
 
 template <int Dim>
 void apply_overrides(const SceneOverrides& o, Scene<Dim>& scene) {
-  PicOptions<Dim>& p = scene.pic;
+  pic::PicOptions<Dim>& p = scene.pic;
   if (!o.method.empty()) {
     const bool was_sph = scene.sph;
     scene.sph = o.method == "sph";
     if (!scene.sph) {
       LIQUID_VERIFY(scene.grid_given, "{}: method '{}' runs on a grid, and the scene has no [grid] table",
                     scene.path, o.method);
-      p.transfer = parse_pic_transfer(o.method);
-      if (p.transfer != PicTransfer::rbf) scene.adaptive = p.adaptive = false;
+      p.transfer = pic::parse_pic_transfer(o.method);
+      if (p.transfer != pic::PicTransfer::rbf) scene.adaptive = p.adaptive = false;
     }
     if (was_sph != scene.sph && !scene.output.fields_given)
       scene.output.fields = scene.sph ? SceneOutput::sph_fields() : SceneOutput::pic_fields();
@@ -186,7 +186,7 @@ void apply_overrides(const SceneOverrides& o, Scene<Dim>& scene) {
     } else {
       LIQUID_VERIFY(o.surface == "air" || o.surface == "levelset",
                     "--surface {}: a PIC run's pressure surface is 'air' or 'levelset'", o.surface);
-      p.surface = parse_pic_surface(o.surface);
+      p.surface = pic::parse_pic_surface(o.surface);
     }
   }
   if (!o.solver.empty()) {
@@ -201,7 +201,7 @@ void apply_overrides(const SceneOverrides& o, Scene<Dim>& scene) {
                   o.amg_reuse);
     p.solver.amg.reuse_factor = o.amg_reuse;
   }
-  LIQUID_VERIFY(scene.sph || !p.adaptive || p.transfer == PicTransfer::rbf,
+  LIQUID_VERIFY(scene.sph || !p.adaptive || p.transfer == pic::PicTransfer::rbf,
                 "method '{}' runs on a regular grid only; drop --adaptive or use --method rbf",
                 to_string(p.transfer));
   if (o.spacing != -1) {
@@ -258,7 +258,7 @@ SceneRunner<Dim>::SceneRunner(Scene<Dim> scene, RunSettings settings, bool seed)
   LIQUID_VERIFY(settings_.checkpoint_every == 0 || !settings_.out.empty(),
                 "checkpoints need an output folder (--out)");
   io_->series = detail::open_output(settings_, scene_.name);
-  sim_ = std::make_unique<AdaptivePic<Dim>>(scene_.pic);
+  sim_ = std::make_unique<pic::AdaptivePic<Dim>>(scene_.pic);
   if (seed) {
     sim_->seed(scene_.liquid, scene_.velocity);
     write_frame();
@@ -281,7 +281,7 @@ std::string SceneRunner<Dim>::stem(const char* what, long index) const {
 }
 
 template <int Dim>
-const PicStepReport& SceneRunner<Dim>::step() {
+const pic::PicStepReport& SceneRunner<Dim>::step() {
   const auto t0 = std::chrono::steady_clock::now();
   const SceneTime& t = scene_.time;
   const double dt = detail::next_step(t, sim_->stable_dt(t.cfl, t.dt_max), sim_->time());
@@ -295,11 +295,11 @@ const PicStepReport& SceneRunner<Dim>::step() {
   sum_cells_ += static_cast<double>(last_.n_cells);
   sum_particles_ += static_cast<double>(last_.n_particles);
   // The regular grid's count for the same liquid at the same finest h (see RunSummary).
-  const CellGraph<Dim>& g = sim_->graph();
+  const tree::CellGraph<Dim>& g = sim_->graph();
   const int finest = scene_.pic.finest_level;
   double regular = 0.0;
   long fine_cells = 0, fine_particles = 0;
-  for (CellId c : sim_->classification().fluid) {
+  for (tree::CellId c : sim_->classification().fluid) {
     regular += std::ldexp(1.0, Dim * (finest - g.level(c)));
     if (g.level(c) == finest) ++fine_cells, fine_particles += sim_->bins().count(c);
   }
@@ -317,12 +317,12 @@ const PicStepReport& SceneRunner<Dim>::step() {
 template <int Dim>
 void SceneRunner<Dim>::write_frame() {
   if (settings_.out.empty() || !settings_.frames) return;
-  const AdaptivePic<Dim>& s = *sim_;
+  const pic::AdaptivePic<Dim>& s = *sim_;
   std::vector<std::string> grids;
   if (scene_.output.cells) {
-    const CellGraph<Dim>& g = s.graph();
+    const tree::CellGraph<Dim>& g = s.graph();
     std::vector<double> type(g.cell_capacity(), 0.0);
-    for (CellId c = 0; c < g.cell_capacity(); ++c)
+    for (tree::CellId c = 0; c < g.cell_capacity(); ++c)
       if (g.alive(c)) type[c] = static_cast<double>(s.classification().type[c]);
     std::vector<io::CellField> fields;
     if (scene_.output.writes("pressure")) fields.push_back({"pressure", s.pressure()});
@@ -332,7 +332,7 @@ void SceneRunner<Dim>::write_frame() {
     grids.push_back(f.grid);
   }
   if (scene_.output.particles) {
-    const Particles<Dim>& p = s.particles();
+    const particles::Particles<Dim>& p = s.particles();
     std::vector<double> v(static_cast<std::size_t>(p.size()) * Dim), speed(p.size());
     for (int i = 0; i < p.size(); ++i) {
       for (int d = 0; d < Dim; ++d) v[static_cast<std::size_t>(i) * Dim + d] = p.v[i][d];
@@ -356,13 +356,13 @@ void SceneRunner<Dim>::write_frame() {
 template <int Dim>
 std::string SceneRunner<Dim>::checkpoint() {
   LIQUID_VERIFY(!settings_.out.empty(), "a checkpoint needs an output folder (--out)");
-  const PicState<Dim> st = sim_->state();
+  const pic::PicState<Dim> st = sim_->state();
   const std::string path = stem("checkpoint", st.step) + ".h5";
   io::ArchiveWriter w(path);
   w.put_scalar("dimension", static_cast<std::int64_t>(Dim));
   detail::put_run_settings(w, settings_, settings_.scene_path.empty() ? scene_.path : settings_.scene_path);
 
-  const CellGraphState<Dim>& gs = st.graph;
+  const tree::CellGraphState<Dim>& gs = st.graph;
   w.put("pic/graph/domain_lo", std::span<const double>(gs.domain.lo.data(), Dim));
   w.put("pic/graph/domain_hi", std::span<const double>(gs.domain.hi.data(), Dim));
   const std::vector<std::int32_t> graph_options = {gs.options.max_jump, gs.options.min_level,
@@ -415,7 +415,7 @@ SceneRunner<Dim> SceneRunner<Dim>::resume(const std::string& checkpoint, RunSett
   Scene<Dim> scene = load_scene<Dim>(settings.scene_path);
   apply_overrides<Dim>(o, scene);
 
-  PicState<Dim> st;
+  pic::PicState<Dim> st;
   // The tree's own settings as saved; AdaptivePic::restore() checks them against the scene's.
   const std::vector<double> lo = r.doubles("pic/graph/domain_lo"), hi = r.doubles("pic/graph/domain_hi");
   const std::vector<std::int32_t> graph_options = r.int32s("pic/graph/options");
@@ -498,4 +498,4 @@ template void apply_overrides<3>(const SceneOverrides&, Scene<3>&);
 template class SceneRunner<2>;
 template class SceneRunner<3>;
 
-}  // namespace liquid
+}  // namespace liquid::scene

@@ -22,7 +22,7 @@
 #include "liquid/pic/adaptive_pic.hpp"
 #include "liquid/scene/scene.hpp"
 
-namespace liquid {
+namespace liquid::scene {
 
 /// How a run differs from its scene file (the command line's overrides), kept in checkpoints so
 /// that a resumed run rebuilds the same solver.
@@ -87,13 +87,13 @@ class SceneRunner {
 
   bool done() const;
   /// One time step (and the frame or checkpoint due after it).
-  const PicStepReport& step();
+  const pic::PicStepReport& step();
   /// Writes a checkpoint of the current state now; returns its path.
   std::string checkpoint();
 
   const Scene<Dim>& scene() const { return scene_; }
-  const AdaptivePic<Dim>& solver() const { return *sim_; }
-  const PicStepReport& last() const { return last_; }
+  const pic::AdaptivePic<Dim>& solver() const { return *sim_; }
+  const pic::PicStepReport& last() const { return last_; }
   RunSummary summary() const;
   /// Paths of the files written so far (frames, series, checkpoints), in order.
   const std::vector<std::string>& written() const { return written_; }
@@ -107,9 +107,9 @@ class SceneRunner {
 
   Scene<Dim> scene_;
   RunSettings settings_;
-  std::unique_ptr<AdaptivePic<Dim>> sim_;
+  std::unique_ptr<pic::AdaptivePic<Dim>> sim_;
   std::unique_ptr<Private> io_;
-  PicStepReport last_;
+  pic::PicStepReport last_;
   int frame_ = 0;
   double next_frame_ = 0.0;
   // Sums for the summary (restored from checkpoints so that a resumed run reports the whole run).
@@ -123,4 +123,4 @@ class SceneRunner {
 extern template class SceneRunner<2>;
 extern template class SceneRunner<3>;
 
-}  // namespace liquid
+}  // namespace liquid::scene

@@ -19,7 +19,7 @@
 #define LIQUID_SCENES_DIR "solver/scenes"
 #endif
 
-namespace liquid {
+namespace liquid::scene {
 
 namespace {
 
@@ -583,23 +583,24 @@ template <int Dim>
 void read_method(const TableReader& r, Scene<Dim>& s) {
   const std::string method = r.choice("method", {"rbf", "pic", "flip", "apic", "sph"}, std::string("rbf"));
   s.sph = method == "sph";
-  s.pic.transfer = parse_pic_transfer(s.sph ? "rbf" : method);
-  s.adaptive = r.boolean("adaptive", s.pic.transfer == PicTransfer::rbf);
+  s.pic.transfer = pic::parse_pic_transfer(s.sph ? "rbf" : method);
+  s.adaptive = r.boolean("adaptive", s.pic.transfer == pic::PicTransfer::rbf);
   LIQUID_VERIFY(
-      s.sph || !s.adaptive || s.pic.transfer == PicTransfer::rbf,
+      s.sph || !s.adaptive || s.pic.transfer == pic::PicTransfer::rbf,
       "{}: method '{}' runs on a uniform grid: set solver.adaptive = false (adaptive trees use rbf)",
       r.where("adaptive"), to_string(s.pic.transfer));
-  s.gravity = r.vec<Dim>("gravity", PicOptions<Dim>::default_gravity());
+  s.gravity = r.vec<Dim>("gravity", pic::PicOptions<Dim>::default_gravity());
 }
 
 /// The PIC solver's [solver] keys: transfers, reseeding, surface, projection, the closed box's PPE.
 template <int Dim>
 void read_pic_solver(const TableReader& r, Scene<Dim>& s) {
-  PicOptions<Dim>& o = s.pic;
+  pic::PicOptions<Dim>& o = s.pic;
   o.flip = r.number("flip", 0.95);
   LIQUID_VERIFY(o.flip >= 0.0 && o.flip <= 1.0, "{}: {} is outside [0, 1]", r.where("flip"), o.flip);
-  o.integrator =
-      r.choice("integrator", {"rk2", "rk3"}, std::string("rk2")) == "rk2" ? Integrator::rk2 : Integrator::rk3;
+  o.integrator = r.choice("integrator", {"rk2", "rk3"}, std::string("rk2")) == "rk2"
+                     ? particles::Integrator::rk2
+                     : particles::Integrator::rk3;
   o.reseed = r.boolean("reseed", true);
   // The paper's preset first: the keys below override what it sets.
   s.paper_preset = r.choice("preset", {"default", "paper"}, std::string("default")) == "paper";
@@ -629,13 +630,13 @@ void read_pic_solver(const TableReader& r, Scene<Dim>& s) {
                             : mac::Nullspace::zero_mean;
   o.extrapolation_layers = static_cast<int>(r.integer_in("extrapolation", 1, 64, 4));
   o.advect_cfl = r.positive("advect_cfl", 1.0);
-  o.surface = parse_pic_surface(r.choice("surface", {"air", "levelset"}, std::string("air")));
+  o.surface = pic::parse_pic_surface(r.choice("surface", {"air", "levelset"}, std::string("air")));
   o.surface_radius = r.positive("surface_radius", o.surface_radius);
   LIQUID_VERIFY(o.surface_radius < 2.0, "{}: {} finest cells is too wide (below 2)",
                 r.where("surface_radius"), o.surface_radius);
   o.projection =
-      parse_pic_projection(r.choice("projection", {"volume", "mass", "split"}, std::string("volume")));
-  LIQUID_VERIFY(o.projection == PicProjection::volume || s.sph || o.transfer != PicTransfer::rbf,
+      pic::parse_pic_projection(r.choice("projection", {"volume", "mass", "split"}, std::string("volume")));
+  LIQUID_VERIFY(o.projection == pic::PicProjection::volume || s.sph || o.transfer != pic::PicTransfer::rbf,
                 "{}: the {} projection needs method pic, flip or apic (a uniform grid)",
                 r.where("projection"), to_string(o.projection));
   o.min_face_mass = r.positive("min_face_mass", o.min_face_mass);
@@ -647,7 +648,7 @@ void read_pic_solver(const TableReader& r, Scene<Dim>& s) {
 template <int Dim>
 void read_grid(const TableReader& top, Scene<Dim>& s) {
   if (!top.has("grid") && s.sph) return;
-  PicOptions<Dim>& o = s.pic;
+  pic::PicOptions<Dim>& o = s.pic;
   const toml::table* t = top.table("grid");
   LIQUID_VERIFY(t != nullptr, "{}: missing table [grid] (at least 'finest')", s.path);
   s.grid_given = true;
@@ -657,7 +658,7 @@ void read_grid(const TableReader& top, Scene<Dim>& s) {
       static_cast<int>(r.integer_in("coarse", 0, o.finest_level, std::max(0, o.finest_level - 3)));
   if (r.has("max_jump") && (*t)["max_jump"].is_string()) {
     r.choice("max_jump", {"unlimited"});
-    o.max_jump = unlimited_jump;
+    o.max_jump = tree::unlimited_jump;
   } else {
     o.max_jump = static_cast<int>(r.integer_in("max_jump", 1, 4, 2));
   }
@@ -689,7 +690,7 @@ template <int Dim>
 void read_ppe(const TableReader& top, Scene<Dim>& s) {
   const std::string& path = s.path;
   static const toml::table empty;
-  PicOptions<Dim>& o = s.pic;
+  pic::PicOptions<Dim>& o = s.pic;
   const toml::table* t = top.table("ppe");
   const TableReader r(t ? *t : empty, path, "ppe",
                       {"solver", "tolerance", "max_iterations", "continue_on_failure", "amg_reuse"});
@@ -799,7 +800,7 @@ void read_shapes(const TableReader& top, Scene<Dim>& s) {
 /// adaptivity, solids and sources.
 template <int Dim>
 void assemble_pic(Scene<Dim>& s) {
-  PicOptions<Dim>& o = s.pic;
+  pic::PicOptions<Dim>& o = s.pic;
   o.domain = s.domain;
   o.gravity = s.gravity;
   o.adaptive = s.adaptive;
@@ -885,4 +886,4 @@ template double sph_sound_speed<3>(const Scene<3>&);
 template Scene<2> load_scene<2>(const std::string&);
 template Scene<3> load_scene<3>(const std::string&);
 
-}  // namespace liquid
+}  // namespace liquid::scene

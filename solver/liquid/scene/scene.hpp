@@ -18,7 +18,7 @@
 #include "liquid/pic/adaptive_pic.hpp"
 #include "liquid/sph/adaptive_sph.hpp"
 
-namespace liquid {
+namespace liquid::scene {
 
 /// When a run ends and how its steps are sized.
 struct SceneTime {
@@ -87,11 +87,11 @@ struct Scene {
   std::string figure;       ///< the paper's figure the scene reproduces ("" if none)
   std::string path;         ///< the file read
   Box<Dim> domain{Vec<Dim>::Zero(), Vec<Dim>::Ones()};  ///< the tank: the PIC domain, the SPH container
-  Vec<Dim> gravity = PicOptions<Dim>::default_gravity();
+  Vec<Dim> gravity = pic::PicOptions<Dim>::default_gravity();
   bool adaptive = true;           ///< solver.adaptive: the tree (PIC) or the particle levels (SPH)
   levelset::Function<Dim> solid;  ///< the [[solid]] shapes combined (< 0 inside; empty: none)
   std::vector<SceneSource<Dim>> sources;
-  PicOptions<Dim> pic;  ///< the PIC solver's options
+  pic::PicOptions<Dim> pic;  ///< the PIC solver's options
   levelset::Function<Dim> liquid;
   /// Initial velocity by position: that of the last [[fluid]] shape holding the point (0 if none).
   std::function<Vec<Dim>(const Vec<Dim>&)> velocity;
@@ -151,4 +151,4 @@ extern template double sph_sound_speed<3>(const Scene<3>&);
 extern template Scene<2> load_scene<2>(const std::string&);
 extern template Scene<3> load_scene<3>(const std::string&);
 
-}  // namespace liquid
+}  // namespace liquid::scene

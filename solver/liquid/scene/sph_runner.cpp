@@ -17,7 +17,7 @@
 #include "liquid/sph/distance_surface.hpp"
 #include "liquid/surface/surface.hpp"
 
-namespace liquid {
+namespace liquid::scene {
 
 namespace {
 
@@ -310,4 +310,4 @@ SphRunSummary SphSceneRunner<Dim>::summary() const {
 template class SphSceneRunner<2>;
 template class SphSceneRunner<3>;
 
-}  // namespace liquid
+}  // namespace liquid::scene

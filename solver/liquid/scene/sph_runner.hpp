@@ -29,7 +29,7 @@
 #include "liquid/scene/runner.hpp"
 #include "liquid/sph/adaptive_sph.hpp"
 
-namespace liquid {
+namespace liquid::scene {
 
 /// Averages over the steps of an SPH run: the paper's Table 1 (Adams et al. 2007) columns.
 struct SphRunSummary {
@@ -102,4 +102,4 @@ class SphSceneRunner {
 extern template class SphSceneRunner<2>;
 extern template class SphSceneRunner<3>;
 
-}  // namespace liquid
+}  // namespace liquid::scene

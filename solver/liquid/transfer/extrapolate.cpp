@@ -5,34 +5,34 @@
 #include "liquid/core/error.hpp"
 #include "liquid/core/parallel.hpp"
 
-namespace liquid {
+namespace liquid::transfer {
 
 template <int Dim>
-ExtrapolationReport extrapolate_faces(const CellGraph<Dim>& graph, int layers, std::span<double> value,
+ExtrapolationReport extrapolate_faces(const tree::CellGraph<Dim>& graph, int layers, std::span<double> value,
                                       std::span<std::uint8_t> known) {
   LIQUID_VERIFY(layers >= 0, "extrapolate_faces: {} layers", layers);
   LIQUID_VERIFY(static_cast<int>(value.size()) >= graph.face_capacity() && known.size() == value.size(),
                 "extrapolate_faces: {} values and {} flags for {} face ids", value.size(), known.size(),
                 graph.face_capacity());
   ExtrapolationReport report;
-  std::vector<FaceId> unknown;
-  graph.for_each_face([&](FaceId f) {
+  std::vector<tree::FaceId> unknown;
+  graph.for_each_face([&](tree::FaceId f) {
     if (!known[f]) unknown.push_back(f);
   });
   std::vector<double> next(unknown.size());
   std::vector<std::uint8_t> filled(unknown.size());
   struct Scratch {
-    std::vector<CellId> ring, cells;
+    std::vector<tree::CellId> ring, cells;
   };
   for (int layer = 0; layer < layers && !unknown.empty(); ++layer) {
     parallel_for(
         static_cast<long>(unknown.size()), [] { return Scratch{}; },
         [&](Scratch& s, long i) {
-          const FaceId f = unknown[i];
+          const tree::FaceId f = unknown[i];
           const int axis = graph.face(f).axis;
           s.cells.clear();
-          for (CellId c : graph.face(f).cell) {
-            if (c == no_cell) continue;
+          for (tree::CellId c : graph.face(f).cell) {
+            if (c == tree::no_cell) continue;
             graph.k_ring(c, 1, s.ring);
             s.cells.insert(s.cells.end(), s.ring.begin(), s.ring.end());
           }
@@ -41,12 +41,13 @@ ExtrapolationReport extrapolate_faces(const CellGraph<Dim>& graph, int layers, s
           // Each face once: a face is counted from the lower-id cell holding it among s.cells.
           double sum = 0.0;
           long n = 0;
-          for (CellId c : s.cells)
-            for (FaceId g : graph.faces(c)) {
-              const GraphFace& gf = graph.face(g);
+          for (tree::CellId c : s.cells)
+            for (tree::FaceId g : graph.faces(c)) {
+              const tree::GraphFace& gf = graph.face(g);
               if (gf.axis != axis || !known[g]) continue;
-              const CellId other = gf.cell[0] == c ? gf.cell[1] : gf.cell[0];
-              if (other != no_cell && other < c && std::binary_search(s.cells.begin(), s.cells.end(), other))
+              const tree::CellId other = gf.cell[0] == c ? gf.cell[1] : gf.cell[0];
+              if (other != tree::no_cell && other < c &&
+                  std::binary_search(s.cells.begin(), s.cells.end(), other))
                 continue;
               sum += value[g];
               ++n;
@@ -77,9 +78,9 @@ ExtrapolationReport extrapolate_faces(const CellGraph<Dim>& graph, int layers, s
   return report;
 }
 
-template ExtrapolationReport extrapolate_faces<2>(const CellGraph<2>&, int, std::span<double>,
+template ExtrapolationReport extrapolate_faces<2>(const tree::CellGraph<2>&, int, std::span<double>,
                                                   std::span<std::uint8_t>);
-template ExtrapolationReport extrapolate_faces<3>(const CellGraph<3>&, int, std::span<double>,
+template ExtrapolationReport extrapolate_faces<3>(const tree::CellGraph<3>&, int, std::span<double>,
                                                   std::span<std::uint8_t>);
 
-}  // namespace liquid
+}  // namespace liquid::transfer

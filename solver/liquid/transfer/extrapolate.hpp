@@ -13,7 +13,7 @@
 
 #include "liquid/tree/cell_graph.hpp"
 
-namespace liquid {
+namespace liquid::transfer {
 
 struct ExtrapolationReport {
   std::vector<long> filled;  ///< faces filled per layer
@@ -22,7 +22,7 @@ struct ExtrapolationReport {
 
 /// Fills unknown faces (known[f] == 0) of `value` up to `layers` layers deep; known is updated.
 template <int Dim>
-ExtrapolationReport extrapolate_faces(const CellGraph<Dim>& graph, int layers, std::span<double> value,
+ExtrapolationReport extrapolate_faces(const tree::CellGraph<Dim>& graph, int layers, std::span<double> value,
                                       std::span<std::uint8_t> known);
 
-}  // namespace liquid
+}  // namespace liquid::transfer

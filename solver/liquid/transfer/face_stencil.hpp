@@ -16,21 +16,22 @@ template <int Dim>
 struct FaceStencil {
   std::array<std::vector<Vec<Dim>>, Dim> nodes;  ///< per axis: face centres
   std::array<std::vector<double>, Dim> values;   ///< per axis: the face values there
-  std::vector<CellId> ring;                      // scratch
-  std::vector<FaceId> faces;                     // scratch
+  std::vector<tree::CellId> ring;                // scratch
+  std::vector<tree::FaceId> faces;               // scratch
 };
 
 /// Fills `out` for cell c: faces of the cells within `rings` hops of c, each once, in ascending id,
 /// skipping faces with known[f] == 0 (known empty: all are known), with their values u[f].
 template <int Dim>
-void gather_face_stencil(const CellGraph<Dim>& graph, CellId c, int rings, std::span<const double> u,
-                         std::span<const std::uint8_t> known, FaceStencil<Dim>& out);
+void gather_face_stencil(const tree::CellGraph<Dim>& graph, tree::CellId c, int rings,
+                         std::span<const double> u, std::span<const std::uint8_t> known,
+                         FaceStencil<Dim>& out);
 
 /// The RBF interpolant of `nodes` (one axis of cell c's stencil) fitted to `values`: through
 /// `cache` when given (shared factors, the values taken in its node order), else factorised for
 /// these nodes alone. Left unfitted when its status is not usable.
 template <int Dim>
-rbf::Interpolant<Dim> fitted_interpolant(const CellGraph<Dim>& graph, CellId c,
+rbf::Interpolant<Dim> fitted_interpolant(const tree::CellGraph<Dim>& graph, tree::CellId c,
                                          std::span<const Vec<Dim>> nodes, std::span<const double> values,
                                          const rbf::Config& config, rbf::InterpolantCache<Dim>* cache);
 

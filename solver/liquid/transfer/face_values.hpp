@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-namespace liquid {
+namespace liquid::transfer {
 
 /// One normal velocity component per face id (dead ids unused). A face that no particle reaches is
 /// unknown: value 0, known 0, to be filled by extrapolate_faces() or the caller. Never NaN.
@@ -36,4 +36,4 @@ struct TransferReport {
   std::string describe() const;
 };
 
-}  // namespace liquid
+}  // namespace liquid::transfer

@@ -8,7 +8,7 @@
 #include "liquid/core/error.hpp"
 #include "liquid/core/parallel.hpp"
 
-namespace liquid {
+namespace liquid::transfer {
 
 namespace {
 
@@ -29,12 +29,12 @@ Eigen::Vector3d axis_vector(int k) {
 }  // namespace
 
 template <int Dim>
-RegularLattice<Dim>::RegularLattice(const CellGraph<Dim>& graph) {
+RegularLattice<Dim>::RegularLattice(const tree::CellGraph<Dim>& graph) {
   LIQUID_VERIFY(graph.n_cells() > 0, "RegularLattice: the graph has no cells");
   level_ = graph.deepest_level();
   LIQUID_VERIFY(level_ >= 1,
                 "RegularLattice: the tree is a single cell; the baselines need level 1 or finer");
-  graph.for_each_cell([&](CellId c) {
+  graph.for_each_cell([&](tree::CellId c) {
     LIQUID_VERIFY(graph.level(c) == level_,
                   "the regular PIC/FLIP/APIC transfers need a uniform tree: cell {} is at level {}, not {}",
                   c, graph.level(c), level_);
@@ -44,18 +44,18 @@ RegularLattice<Dim>::RegularLattice(const CellGraph<Dim>& graph) {
   h_ = graph.domain().size() / static_cast<double>(n_);
   long n_cells = 1;
   for (int j = 0; j < Dim; ++j) n_cells *= n_;
-  cells_.assign(n_cells, no_cell);
+  cells_.assign(n_cells, tree::no_cell);
   for (int k = 0; k < Dim; ++k) {
     long m = 1;
     for (int j = 0; j < Dim; ++j) m *= extent(k, j);
-    faces_[k].assign(m, no_face);
+    faces_[k].assign(m, tree::no_face);
   }
-  graph.for_each_cell([&](CellId c) {
+  graph.for_each_cell([&](tree::CellId c) {
     const IVec<Dim> a = graph.address(c);
     cells_[flat_cell(a)] = c;
     for (int k = 0; k < Dim; ++k)
       for (int dir : {-1, 1})
-        graph.for_each_side_face(c, k, dir, [&](const SideFace& s) {
+        graph.for_each_side_face(c, k, dir, [&](const tree::SideFace& s) {
           IVec<Dim> b = a;
           if (dir > 0) ++b[k];
           faces_[k][flat_face(k, b)] = s.face;
@@ -78,16 +78,16 @@ long RegularLattice<Dim>::flat_face(int k, const IVec<Dim>& a) const {
 }
 
 template <int Dim>
-CellId RegularLattice<Dim>::cell(const IVec<Dim>& a) const {
+tree::CellId RegularLattice<Dim>::cell(const IVec<Dim>& a) const {
   for (int j = 0; j < Dim; ++j)
-    if (a[j] < 0 || a[j] >= n_) return no_cell;
+    if (a[j] < 0 || a[j] >= n_) return tree::no_cell;
   return cells_[flat_cell(a)];
 }
 
 template <int Dim>
-FaceId RegularLattice<Dim>::face(int k, const IVec<Dim>& a) const {
+tree::FaceId RegularLattice<Dim>::face(int k, const IVec<Dim>& a) const {
   for (int j = 0; j < Dim; ++j)
-    if (a[j] < 0 || a[j] >= extent(k, j)) return no_face;
+    if (a[j] < 0 || a[j] >= extent(k, j)) return tree::no_face;
   return faces_[k][flat_face(k, a)];
 }
 
@@ -138,9 +138,9 @@ Vec<Dim> LinearStencil<Dim>::gradient(int corner, const Vec<Dim>& h) const {
 }
 
 template <int Dim>
-TransferReport linear_to_faces(const CellGraph<Dim>& graph, const RegularLattice<Dim>& lattice,
-                               const Particles<Dim>& particles, const CellBins& bins, RegularScheme scheme,
-                               std::span<const double> masses, FaceValues& out) {
+TransferReport linear_to_faces(const tree::CellGraph<Dim>& graph, const RegularLattice<Dim>& lattice,
+                               const particles::Particles<Dim>& particles, const particles::CellBins& bins,
+                               RegularScheme scheme, std::span<const double> masses, FaceValues& out) {
   LIQUID_VERIFY(bins.n_particles() == particles.size(),
                 "linear_to_faces: bins hold {} particles, there are {}", bins.n_particles(),
                 particles.size());
@@ -162,7 +162,7 @@ TransferReport linear_to_faces(const CellGraph<Dim>& graph, const RegularLattice
             a[j] = flat % extent[j];
             flat /= extent[j];
           }
-          const FaceId f = lattice.face(k, a);
+          const tree::FaceId f = lattice.face(k, a);
           const Vec<Dim> xf = lattice.face_position(k, a);
           IVec<Dim> lo, hi;
           for (int j = 0; j < Dim; ++j) {
@@ -248,16 +248,16 @@ TransferReport linear_to_points(const RegularLattice<Dim>& lattice, std::span<co
 }
 
 template <int Dim>
-Vec<Dim> particle_momentum(const Particles<Dim>& particles, std::span<const double> masses) {
+Vec<Dim> particle_momentum(const particles::Particles<Dim>& particles, std::span<const double> masses) {
   Vec<Dim> m = Vec<Dim>::Zero();
   for (int p = 0; p < particles.size(); ++p) m += (masses.empty() ? 1.0 : masses[p]) * particles.v[p];
   return m;
 }
 
 template <int Dim>
-Vec<Dim> face_momentum(const CellGraph<Dim>& graph, const FaceValues& faces) {
+Vec<Dim> face_momentum(const tree::CellGraph<Dim>& graph, const FaceValues& faces) {
   Vec<Dim> m = Vec<Dim>::Zero();
-  graph.for_each_face([&](FaceId f) { m[graph.face(f).axis] += faces.weight[f] * faces.value[f]; });
+  graph.for_each_face([&](tree::FaceId f) { m[graph.face(f).axis] += faces.weight[f] * faces.value[f]; });
   return m;
 }
 
@@ -280,7 +280,7 @@ Eigen::Matrix<double, Dim, Dim> inertia(const RegularLattice<Dim>& lattice, int 
 }  // namespace
 
 template <int Dim>
-double particle_affine_energy(const RegularLattice<Dim>& lattice, const Particles<Dim>& particles,
+double particle_affine_energy(const RegularLattice<Dim>& lattice, const particles::Particles<Dim>& particles,
                               std::span<const double> affine, std::span<const double> masses) {
   double total = 0.0;
   for (int p = 0; p < particles.size(); ++p)
@@ -292,7 +292,8 @@ double particle_affine_energy(const RegularLattice<Dim>& lattice, const Particle
 }
 
 template <int Dim>
-Eigen::Vector3d particle_angular_momentum(const RegularLattice<Dim>& lattice, const Particles<Dim>& particles,
+Eigen::Vector3d particle_angular_momentum(const RegularLattice<Dim>& lattice,
+                                          const particles::Particles<Dim>& particles,
                                           std::span<const double> affine, std::span<const double> masses) {
   Eigen::Vector3d total = Eigen::Vector3d::Zero();
   for (int p = 0; p < particles.size(); ++p) {
@@ -310,9 +311,9 @@ Eigen::Vector3d particle_angular_momentum(const RegularLattice<Dim>& lattice, co
 }
 
 template <int Dim>
-Eigen::Vector3d face_angular_momentum(const CellGraph<Dim>& graph, const FaceValues& faces) {
+Eigen::Vector3d face_angular_momentum(const tree::CellGraph<Dim>& graph, const FaceValues& faces) {
   Eigen::Vector3d total = Eigen::Vector3d::Zero();
-  graph.for_each_face([&](FaceId f) {
+  graph.for_each_face([&](tree::FaceId f) {
     const int k = graph.face(f).axis;
     total += faces.weight[f] * faces.value[f] * lift(graph.face_centre(f)).cross(axis_vector<Dim>(k));
   });
@@ -322,21 +323,22 @@ Eigen::Vector3d face_angular_momentum(const CellGraph<Dim>& graph, const FaceVal
 #define LIQUID_REGULAR(D)                                                                                  \
   template class RegularLattice<D>;                                                                        \
   template struct LinearStencil<D>;                                                                        \
-  template TransferReport linear_to_faces<D>(const CellGraph<D>&, const RegularLattice<D>&,                \
-                                             const Particles<D>&, const CellBins&, RegularScheme,          \
-                                             std::span<const double>, FaceValues&);                        \
+  template TransferReport linear_to_faces<D>(const tree::CellGraph<D>&, const RegularLattice<D>&,          \
+                                             const particles::Particles<D>&, const particles::CellBins&,   \
+                                             RegularScheme, std::span<const double>, FaceValues&);         \
   template TransferReport linear_to_points<D>(const RegularLattice<D>&, std::span<const double>,           \
                                               std::span<const Vec<D>>, std::span<Vec<D>>,                  \
                                               std::span<double>);                                          \
-  template Vec<D> particle_momentum<D>(const Particles<D>&, std::span<const double>);                      \
-  template Vec<D> face_momentum<D>(const CellGraph<D>&, const FaceValues&);                                \
-  template Eigen::Vector3d particle_angular_momentum<D>(const RegularLattice<D>&, const Particles<D>&,     \
+  template Vec<D> particle_momentum<D>(const particles::Particles<D>&, std::span<const double>);           \
+  template Vec<D> face_momentum<D>(const tree::CellGraph<D>&, const FaceValues&);                          \
+  template Eigen::Vector3d particle_angular_momentum<D>(const RegularLattice<D>&,                          \
+                                                        const particles::Particles<D>&,                    \
                                                         std::span<const double>, std::span<const double>); \
-  template Eigen::Vector3d face_angular_momentum<D>(const CellGraph<D>&, const FaceValues&);               \
-  template double particle_affine_energy<D>(const RegularLattice<D>&, const Particles<D>&,                 \
+  template Eigen::Vector3d face_angular_momentum<D>(const tree::CellGraph<D>&, const FaceValues&);         \
+  template double particle_affine_energy<D>(const RegularLattice<D>&, const particles::Particles<D>&,      \
                                             std::span<const double>, std::span<const double>);
 LIQUID_REGULAR(2)
 LIQUID_REGULAR(3)
 #undef LIQUID_REGULAR
 
-}  // namespace liquid
+}  // namespace liquid::transfer

@@ -30,23 +30,23 @@
 #include "liquid/transfer/face_values.hpp"
 #include "liquid/tree/cell_graph.hpp"
 
-namespace liquid {
+namespace liquid::transfer {
 
 /// The cells and faces of a uniform tree as lattices.
 template <int Dim>
 class RegularLattice {
  public:
   /// Throws naming a cell unless every cell of `graph` is at one level >= 1.
-  explicit RegularLattice(const CellGraph<Dim>& graph);
+  explicit RegularLattice(const tree::CellGraph<Dim>& graph);
 
   int level() const { return level_; }
   long n() const { return n_; }  ///< cells per axis
   const Vec<Dim>& h() const { return h_; }
   const Vec<Dim>& origin() const { return lo_; }
   /// The cell at lattice address a (0 <= a < n), or no_cell outside.
-  CellId cell(const IVec<Dim>& a) const;
+  tree::CellId cell(const IVec<Dim>& a) const;
   /// The axis-k face at lattice address a (0 <= a_k <= n, 0 <= a_j < n), or no_face outside.
-  FaceId face(int k, const IVec<Dim>& a) const;
+  tree::FaceId face(int k, const IVec<Dim>& a) const;
   /// Number of axis-k lattice positions along axis j.
   long extent(int k, int j) const { return j == k ? n_ + 1 : n_; }
   Vec<Dim> face_position(int k, const IVec<Dim>& a) const;
@@ -57,8 +57,8 @@ class RegularLattice {
   int level_ = 0;
   long n_ = 0;
   Vec<Dim> h_, lo_;
-  std::vector<CellId> cells_;
-  std::array<std::vector<FaceId>, Dim> faces_;
+  std::vector<tree::CellId> cells_;
+  std::array<std::vector<tree::FaceId>, Dim> faces_;
 };
 
 /// The multilinear stencil of a point for component k: base lattice address and fractions.
@@ -80,9 +80,9 @@ enum class RegularScheme { pic, apic };
 /// "apic" (Dim*Dim doubles per particle). `out` is reset to graph.face_capacity(); a face no
 /// particle weighs on is unknown.
 template <int Dim>
-TransferReport linear_to_faces(const CellGraph<Dim>& graph, const RegularLattice<Dim>& lattice,
-                               const Particles<Dim>& particles, const CellBins& bins, RegularScheme scheme,
-                               std::span<const double> masses, FaceValues& out);
+TransferReport linear_to_faces(const tree::CellGraph<Dim>& graph, const RegularLattice<Dim>& lattice,
+                               const particles::Particles<Dim>& particles, const particles::CellBins& bins,
+                               RegularScheme scheme, std::span<const double> masses, FaceValues& out);
 
 /// Face -> point on a uniform tree: v (out) at every x. With `affine` non-empty (Dim*Dim doubles per
 /// point) APIC's matrix C is written there too.
@@ -93,14 +93,15 @@ TransferReport linear_to_points(const RegularLattice<Dim>& lattice, std::span<co
 
 /// sum_p m_p v_p (masses empty: unit masses).
 template <int Dim>
-Vec<Dim> particle_momentum(const Particles<Dim>& particles, std::span<const double> masses = {});
+Vec<Dim> particle_momentum(const particles::Particles<Dim>& particles, std::span<const double> masses = {});
 /// sum over faces of weight_f u_f e_axis.
 template <int Dim>
-Vec<Dim> face_momentum(const CellGraph<Dim>& graph, const FaceValues& faces);
+Vec<Dim> face_momentum(const tree::CellGraph<Dim>& graph, const FaceValues& faces);
 /// APIC's particle angular momentum about the origin (z only in 2D): sum_p m_p (x_p x v_p +
 /// sum_k (D_k c_k) x e_k), D_k from the particle's multilinear stencil; `affine` may be empty (C = 0).
 template <int Dim>
-Eigen::Vector3d particle_angular_momentum(const RegularLattice<Dim>& lattice, const Particles<Dim>& particles,
+Eigen::Vector3d particle_angular_momentum(const RegularLattice<Dim>& lattice,
+                                          const particles::Particles<Dim>& particles,
                                           std::span<const double> affine,
                                           std::span<const double> masses = {});
 /// APIC's affine kinetic energy, what the particles' velocities alone leave out: sum_p m_p / 2
@@ -108,10 +109,10 @@ Eigen::Vector3d particle_angular_momentum(const RegularLattice<Dim>& lattice, co
 /// weighted least squares, so |v_p|^2 / 2 plus the particle's share of this never exceeds its
 /// stencil's sum_f w_f u_f^2 / 2, and equals it for a linear field.
 template <int Dim>
-double particle_affine_energy(const RegularLattice<Dim>& lattice, const Particles<Dim>& particles,
+double particle_affine_energy(const RegularLattice<Dim>& lattice, const particles::Particles<Dim>& particles,
                               std::span<const double> affine, std::span<const double> masses = {});
 /// sum over faces of weight_f x_f x (u_f e_axis).
 template <int Dim>
-Eigen::Vector3d face_angular_momentum(const CellGraph<Dim>& graph, const FaceValues& faces);
+Eigen::Vector3d face_angular_momentum(const tree::CellGraph<Dim>& graph, const FaceValues& faces);
 
-}  // namespace liquid
+}  // namespace liquid::transfer

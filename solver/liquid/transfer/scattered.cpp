@@ -15,7 +15,7 @@
 #include "liquid/transfer/face_stencil.hpp"
 #include "liquid/transfer/mls.hpp"
 
-namespace liquid {
+namespace liquid::transfer {
 
 const char* to_string(Scheme scheme) {
   return scheme == Scheme::rbf ? "rbf" : "mls";
@@ -119,7 +119,7 @@ void keep_nearest(std::vector<Vec<Dim>>& nodes, std::vector<double>& values, con
 
 template <int Dim>
 struct Scratch {
-  std::vector<CellId> cells, ring;
+  std::vector<tree::CellId> cells, ring;
   std::vector<Vec<Dim>> nodes;
   std::vector<double> values, w;
   transfer::FaceStencil<Dim> stencil;
@@ -129,11 +129,12 @@ struct Scratch {
 /// The stencil cells of a face: its cells and those within rings - 1 hops of them (plus wall_rings
 /// at a domain-boundary face), sorted.
 template <int Dim>
-void face_cells(const CellGraph<Dim>& graph, FaceId f, const TransferOptions& o, Scratch<Dim>& s) {
+void face_cells(const tree::CellGraph<Dim>& graph, tree::FaceId f, const TransferOptions& o,
+                Scratch<Dim>& s) {
   const int rings = o.rings + (graph.face(f).is_boundary() ? o.wall_rings : 0);
   s.cells.clear();
-  for (CellId c : graph.face(f).cell) {
-    if (c == no_cell) continue;
+  for (tree::CellId c : graph.face(f).cell) {
+    if (c == tree::no_cell) continue;
     graph.k_ring(c, rings - 1, s.ring);
     s.cells.insert(s.cells.end(), s.ring.begin(), s.ring.end());
   }
@@ -143,20 +144,19 @@ void face_cells(const CellGraph<Dim>& graph, FaceId f, const TransferOptions& o,
 
 }  // namespace
 
-namespace transfer {
-
 template <int Dim>
-void gather_face_stencil(const CellGraph<Dim>& graph, CellId c, int rings, std::span<const double> u,
-                         std::span<const std::uint8_t> known, FaceStencil<Dim>& out) {
+void gather_face_stencil(const tree::CellGraph<Dim>& graph, tree::CellId c, int rings,
+                         std::span<const double> u, std::span<const std::uint8_t> known,
+                         FaceStencil<Dim>& out) {
   graph.k_ring(c, rings, out.ring);
   out.faces.clear();
-  for (CellId r : out.ring)
-    for (FaceId f : graph.faces(r))
+  for (tree::CellId r : out.ring)
+    for (tree::FaceId f : graph.faces(r))
       if (known.empty() || known[f]) out.faces.push_back(f);
   std::sort(out.faces.begin(), out.faces.end());
   out.faces.erase(std::unique(out.faces.begin(), out.faces.end()), out.faces.end());
   for (int axis = 0; axis < Dim; ++axis) out.nodes[axis].clear(), out.values[axis].clear();
-  for (FaceId f : out.faces) {
+  for (tree::FaceId f : out.faces) {
     const int axis = graph.face(f).axis;
     out.nodes[axis].push_back(graph.face_centre(f));
     out.values[axis].push_back(u[f]);
@@ -164,7 +164,7 @@ void gather_face_stencil(const CellGraph<Dim>& graph, CellId c, int rings, std::
 }
 
 template <int Dim>
-rbf::Interpolant<Dim> fitted_interpolant(const CellGraph<Dim>& graph, CellId c,
+rbf::Interpolant<Dim> fitted_interpolant(const tree::CellGraph<Dim>& graph, tree::CellId c,
                                          std::span<const Vec<Dim>> nodes, std::span<const double> values,
                                          const rbf::Config& config, rbf::InterpolantCache<Dim>* cache) {
   LIQUID_VERIFY(values.size() == nodes.size(), "fitted_interpolant: {} values for {} nodes of cell {}",
@@ -185,22 +185,21 @@ rbf::Interpolant<Dim> fitted_interpolant(const CellGraph<Dim>& graph, CellId c,
   return interp;
 }
 
-template void gather_face_stencil<2>(const CellGraph<2>&, CellId, int, std::span<const double>,
+template void gather_face_stencil<2>(const tree::CellGraph<2>&, tree::CellId, int, std::span<const double>,
                                      std::span<const std::uint8_t>, FaceStencil<2>&);
-template void gather_face_stencil<3>(const CellGraph<3>&, CellId, int, std::span<const double>,
+template void gather_face_stencil<3>(const tree::CellGraph<3>&, tree::CellId, int, std::span<const double>,
                                      std::span<const std::uint8_t>, FaceStencil<3>&);
-template rbf::Interpolant<2> fitted_interpolant<2>(const CellGraph<2>&, CellId, std::span<const Vec<2>>,
-                                                   std::span<const double>, const rbf::Config&,
-                                                   rbf::InterpolantCache<2>*);
-template rbf::Interpolant<3> fitted_interpolant<3>(const CellGraph<3>&, CellId, std::span<const Vec<3>>,
-                                                   std::span<const double>, const rbf::Config&,
-                                                   rbf::InterpolantCache<3>*);
-
-}  // namespace transfer
+template rbf::Interpolant<2> fitted_interpolant<2>(const tree::CellGraph<2>&, tree::CellId,
+                                                   std::span<const Vec<2>>, std::span<const double>,
+                                                   const rbf::Config&, rbf::InterpolantCache<2>*);
+template rbf::Interpolant<3> fitted_interpolant<3>(const tree::CellGraph<3>&, tree::CellId,
+                                                   std::span<const Vec<3>>, std::span<const double>,
+                                                   const rbf::Config&, rbf::InterpolantCache<3>*);
 
 template <int Dim>
-TransferReport particles_to_faces(const CellGraph<Dim>& graph, const Particles<Dim>& particles,
-                                  const CellBins& bins, const TransferOptions& options, FaceValues& out) {
+TransferReport particles_to_faces(const tree::CellGraph<Dim>& graph,
+                                  const particles::Particles<Dim>& particles, const particles::CellBins& bins,
+                                  const TransferOptions& options, FaceValues& out) {
   check_options(options);
   LIQUID_VERIFY(bins.n_particles() == particles.size(),
                 "particles_to_faces: bins hold {} particles, there are {}", bins.n_particles(),
@@ -212,14 +211,14 @@ TransferReport particles_to_faces(const CellGraph<Dim>& graph, const Particles<D
   parallel_for(
       graph.face_capacity(), [] { return Scratch<Dim>{}; },
       [&](Scratch<Dim>& s, long fl) {
-        const FaceId f = static_cast<FaceId>(fl);
+        const tree::FaceId f = static_cast<tree::FaceId>(fl);
         if (!graph.face_alive(f)) return;
         const int axis = graph.face(f).axis;
         face_cells(graph, f, options, s);
         auto& nodes = s.nodes;
         nodes.clear();
         s.values.clear();
-        for (CellId c : s.cells)
+        for (tree::CellId c : s.cells)
           for (std::int32_t p : bins.of(c)) {
             nodes.push_back(particles.x[p]);
             s.values.push_back(particles.v[p][axis]);
@@ -264,9 +263,10 @@ TransferReport particles_to_faces(const CellGraph<Dim>& graph, const Particles<D
 }
 
 template <int Dim>
-TransferReport faces_to_points(const CellGraph<Dim>& graph, std::span<const double> u,
+TransferReport faces_to_points(const tree::CellGraph<Dim>& graph, std::span<const double> u,
                                std::span<const std::uint8_t> known, std::span<const Vec<Dim>> x,
-                               const CellBins& bins, const TransferOptions& options, std::span<Vec<Dim>> v) {
+                               const particles::CellBins& bins, const TransferOptions& options,
+                               std::span<Vec<Dim>> v) {
   check_options(options);
   LIQUID_VERIFY(static_cast<int>(u.size()) >= graph.face_capacity(),
                 "faces_to_points: {} face values for a graph of {} face ids", u.size(),
@@ -279,14 +279,14 @@ TransferReport faces_to_points(const CellGraph<Dim>& graph, std::span<const doub
   std::unique_ptr<rbf::InterpolantCache<Dim>> cache;
   if (options.share_factors) cache = std::make_unique<rbf::InterpolantCache<Dim>>();
   // The cells that hold points, in id order.
-  std::vector<CellId> cells;
-  for (CellId c = 0; c + 1 < static_cast<CellId>(bins.begin.size()); ++c)
+  std::vector<tree::CellId> cells;
+  for (tree::CellId c = 0; c + 1 < static_cast<tree::CellId>(bins.begin.size()); ++c)
     if (bins.begin[c + 1] > bins.begin[c]) cells.push_back(c);
   TransferReport total;
   parallel_for(
       static_cast<long>(cells.size()), [] { return Scratch<Dim>{}; },
       [&](Scratch<Dim>& s, long ci) {
-        const CellId c = cells[ci];
+        const tree::CellId c = cells[ci];
         const auto pts = bins.of(c);
         transfer::gather_face_stencil<Dim>(graph, c, options.rings, u, known, s.stencil);
         for (int axis = 0; axis < Dim; ++axis) {
@@ -349,14 +349,15 @@ void flip_blend(std::span<const Vec<Dim>> pic, std::span<const Vec<Dim>> delta, 
 }
 
 #define LIQUID_SCATTERED(D)                                                                                \
-  template TransferReport particles_to_faces<D>(const CellGraph<D>&, const Particles<D>&, const CellBins&, \
-                                                const TransferOptions&, FaceValues&);                      \
-  template TransferReport faces_to_points<D>(const CellGraph<D>&, std::span<const double>,                 \
-                                             std::span<const std::uint8_t>, std::span<const Vec<D>>,       \
-                                             const CellBins&, const TransferOptions&, std::span<Vec<D>>);  \
+  template TransferReport particles_to_faces<D>(const tree::CellGraph<D>&, const particles::Particles<D>&, \
+                                                const particles::CellBins&, const TransferOptions&,        \
+                                                FaceValues&);                                              \
+  template TransferReport faces_to_points<D>(                                                              \
+      const tree::CellGraph<D>&, std::span<const double>, std::span<const std::uint8_t>,                   \
+      std::span<const Vec<D>>, const particles::CellBins&, const TransferOptions&, std::span<Vec<D>>);     \
   template void flip_blend<D>(std::span<const Vec<D>>, std::span<const Vec<D>>, double, std::span<Vec<D>>);
 LIQUID_SCATTERED(2)
 LIQUID_SCATTERED(3)
 #undef LIQUID_SCATTERED
 
-}  // namespace liquid
+}  // namespace liquid::transfer

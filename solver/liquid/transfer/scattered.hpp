@@ -34,7 +34,7 @@
 #include "liquid/transfer/face_values.hpp"
 #include "liquid/tree/cell_graph.hpp"
 
-namespace liquid {
+namespace liquid::transfer {
 
 enum class Scheme { rbf, mls };
 const char* to_string(Scheme scheme);
@@ -85,16 +85,18 @@ struct TransferOptions {
 /// Particle -> face for every alive face; `out` is reset to graph.face_capacity() first. Uses
 /// OpenMP. `bins` must be current for `particles`.
 template <int Dim>
-TransferReport particles_to_faces(const CellGraph<Dim>& graph, const Particles<Dim>& particles,
-                                  const CellBins& bins, const TransferOptions& options, FaceValues& out);
+TransferReport particles_to_faces(const tree::CellGraph<Dim>& graph,
+                                  const particles::Particles<Dim>& particles, const particles::CellBins& bins,
+                                  const TransferOptions& options, FaceValues& out);
 
 /// Face -> point: the velocity at every point x[i] (points binned in `bins`; particles or any
 /// sample points) from the face values `u` (indexed by face id). Faces with known[f] == 0 are not
 /// used (pass an empty span when every face is known). `v` (out) has one entry per point. OpenMP.
 template <int Dim>
-TransferReport faces_to_points(const CellGraph<Dim>& graph, std::span<const double> u,
+TransferReport faces_to_points(const tree::CellGraph<Dim>& graph, std::span<const double> u,
                                std::span<const std::uint8_t> known, std::span<const Vec<Dim>> x,
-                               const CellBins& bins, const TransferOptions& options, std::span<Vec<Dim>> v);
+                               const particles::CellBins& bins, const TransferOptions& options,
+                               std::span<Vec<Dim>> v);
 
 /// FLIP's update blended with PIC: v = alpha (v_old + delta) + (1 - alpha) pic, where pic is the
 /// new grid velocity at the particle and delta the change of the grid velocity there (the same
@@ -103,4 +105,4 @@ template <int Dim>
 void flip_blend(std::span<const Vec<Dim>> pic, std::span<const Vec<Dim>> delta, double alpha,
                 std::span<Vec<Dim>> v);
 
-}  // namespace liquid
+}  // namespace liquid::transfer

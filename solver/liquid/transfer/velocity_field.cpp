@@ -9,7 +9,7 @@
 #include "liquid/rbf/interpolant.hpp"
 #include "liquid/transfer/face_stencil.hpp"
 
-namespace liquid {
+namespace liquid::transfer {
 
 template <int Dim>
 struct FaceVelocityField<Dim>::CellInterpolants {
@@ -20,9 +20,9 @@ struct FaceVelocityField<Dim>::CellInterpolants {
 };
 
 template <int Dim>
-FaceVelocityField<Dim>::FaceVelocityField(const CellGraph<Dim>& graph, std::span<const double> u,
+FaceVelocityField<Dim>::FaceVelocityField(const tree::CellGraph<Dim>& graph, std::span<const double> u,
                                           std::span<const std::uint8_t> known, const TransferOptions& options,
-                                          std::span<const CellId> cells)
+                                          std::span<const tree::CellId> cells)
     : graph_(&graph), u_(u.begin(), u.end()), known_(known.begin(), known.end()), options_(options) {
   LIQUID_VERIFY(options.scheme == Scheme::rbf, "FaceVelocityField: scheme {} is not offered (rbf only)",
                 to_string(options.scheme));
@@ -31,7 +31,7 @@ FaceVelocityField<Dim>::FaceVelocityField(const CellGraph<Dim>& graph, std::span
   LIQUID_VERIFY(known.empty() || known.size() == u.size(), "FaceVelocityField: {} known flags for {} faces",
                 known.size(), u.size());
   if (options.share_factors) cache_ = std::make_unique<rbf::InterpolantCache<Dim>>();
-  std::vector<CellId> list(cells.begin(), cells.end());
+  std::vector<tree::CellId> list(cells.begin(), cells.end());
   if (list.empty()) list = graph.cell_ids();
   slot_.assign(graph.cell_capacity(), -1);
   prepared_.resize(list.size());
@@ -49,8 +49,8 @@ FaceVelocityField<Dim>::FaceVelocityField(const CellGraph<Dim>& graph, std::span
 }
 
 template <int Dim>
-FaceVelocityField<Dim>::FaceVelocityField(const CellGraph<Dim>& graph, const RegularLattice<Dim>& lattice,
-                                          std::span<const double> u)
+FaceVelocityField<Dim>::FaceVelocityField(const tree::CellGraph<Dim>& graph,
+                                          const RegularLattice<Dim>& lattice, std::span<const double> u)
     : graph_(&graph), lattice_(&lattice), u_(u.begin(), u.end()) {
   LIQUID_VERIFY(static_cast<int>(u.size()) >= graph.face_capacity(),
                 "FaceVelocityField: {} face values for {} face ids", u.size(), graph.face_capacity());
@@ -62,7 +62,7 @@ template <int Dim>
 FaceVelocityField<Dim>::FaceVelocityField(FaceVelocityField&&) noexcept = default;
 
 template <int Dim>
-void FaceVelocityField<Dim>::prepare(CellId c, CellInterpolants& out) const {
+void FaceVelocityField<Dim>::prepare(tree::CellId c, CellInterpolants& out) const {
   transfer::FaceStencil<Dim> stencil;
   transfer::gather_face_stencil<Dim>(*graph_, c, options_.rings, u_, known_, stencil);
   const rbf::Config config = options_.rbf_config();
@@ -116,7 +116,7 @@ Vec<Dim> FaceVelocityField<Dim>::operator()(const Vec<Dim>& x) const {
     }
     return v;
   }
-  const CellId c = graph_->locate(y);
+  const tree::CellId c = graph_->locate(y);
   if (slot_[c] >= 0) return evaluate(*prepared_[slot_[c]], y);
   CellInterpolants local;
   prepare(c, local);
@@ -126,4 +126,4 @@ Vec<Dim> FaceVelocityField<Dim>::operator()(const Vec<Dim>& x) const {
 template class FaceVelocityField<2>;
 template class FaceVelocityField<3>;
 
-}  // namespace liquid
+}  // namespace liquid::transfer

@@ -19,7 +19,7 @@
 #include "liquid/transfer/scattered.hpp"
 #include "liquid/tree/cell_graph.hpp"
 
-namespace liquid {
+namespace liquid::transfer {
 
 template <int Dim>
 class FaceVelocityField {
@@ -27,11 +27,11 @@ class FaceVelocityField {
   /// RBF (options.scheme must be rbf) on any tree. `u` and `known` (empty: all known) are copied.
   /// `cells`: the cells to prepare (empty: every cell); elsewhere an evaluation factorises on the
   /// fly. Evaluations are thread-safe.
-  FaceVelocityField(const CellGraph<Dim>& graph, std::span<const double> u,
+  FaceVelocityField(const tree::CellGraph<Dim>& graph, std::span<const double> u,
                     std::span<const std::uint8_t> known, const TransferOptions& options,
-                    std::span<const CellId> cells = {});
+                    std::span<const tree::CellId> cells = {});
   /// Multilinear interpolation on a uniform tree.
-  FaceVelocityField(const CellGraph<Dim>& graph, const RegularLattice<Dim>& lattice,
+  FaceVelocityField(const tree::CellGraph<Dim>& graph, const RegularLattice<Dim>& lattice,
                     std::span<const double> u);
   ~FaceVelocityField();
   FaceVelocityField(FaceVelocityField&&) noexcept;
@@ -41,10 +41,10 @@ class FaceVelocityField {
 
  private:
   struct CellInterpolants;
-  void prepare(CellId c, CellInterpolants& out) const;
+  void prepare(tree::CellId c, CellInterpolants& out) const;
   Vec<Dim> evaluate(const CellInterpolants& ci, const Vec<Dim>& x) const;
 
-  const CellGraph<Dim>* graph_ = nullptr;
+  const tree::CellGraph<Dim>* graph_ = nullptr;
   const RegularLattice<Dim>* lattice_ = nullptr;
   std::vector<double> u_;
   std::vector<std::uint8_t> known_;
@@ -57,4 +57,4 @@ class FaceVelocityField {
 extern template class FaceVelocityField<2>;
 extern template class FaceVelocityField<3>;
 
-}  // namespace liquid
+}  // namespace liquid::transfer

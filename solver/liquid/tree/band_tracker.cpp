@@ -57,10 +57,6 @@ template void mark_narrow_band<2>(const CellGraph<2>&, const levelset::Function<
 template void mark_narrow_band<3>(const CellGraph<3>&, const levelset::Function<3>&, int, int, double,
                                   std::span<const CellId>, MarkList&);
 
-}  // namespace liquid::tree
-
-namespace liquid {
-
 template <int Dim>
 NarrowBandTracker<Dim>::NarrowBandTracker(const CellGraph<Dim>& graph, int coarse_level, int fine_level,
                                           double band, double max_motion)
@@ -192,4 +188,4 @@ void NarrowBandTracker<Dim>::mark(const CellGraph<Dim>& graph, const levelset::F
 template class NarrowBandTracker<2>;
 template class NarrowBandTracker<3>;
 
-}  // namespace liquid
+}  // namespace liquid::tree

@@ -35,11 +35,6 @@ template <int Dim>
 void mark_narrow_band(const CellGraph<Dim>& graph, const levelset::Function<Dim>& phi, int coarse_level,
                       int fine_level, double band, std::span<const CellId> cells, MarkList& marks);
 
-}  // namespace liquid::tree
-
-namespace liquid {
-
-// Types live in namespace liquid; groups of free functions (the builders) in liquid::tree (STYLE.md).
 template <int Dim>
 class NarrowBandTracker {
  public:
@@ -78,4 +73,4 @@ class NarrowBandTracker {
 extern template class NarrowBandTracker<2>;
 extern template class NarrowBandTracker<3>;
 
-}  // namespace liquid
+}  // namespace liquid::tree

@@ -10,7 +10,7 @@
 
 #include "liquid/core/error.hpp"
 
-namespace liquid {
+namespace liquid::tree {
 
 std::string InvariantReport::text(int max_lines) const {
   if (ok()) return "all invariants hold";
@@ -380,4 +380,4 @@ bool CellGraph<Dim>::merge_allowed(const std::array<CellId, n_children>& childre
 template class CellGraph<2>;
 template class CellGraph<3>;
 
-}  // namespace liquid
+}  // namespace liquid::tree

@@ -31,7 +31,7 @@
 #include "liquid/tree/id_list.hpp"
 #include "liquid/tree/node_index.hpp"
 
-namespace liquid {
+namespace liquid::tree {
 
 using CellId = std::int32_t;
 using FaceId = std::int32_t;
@@ -369,4 +369,4 @@ void CellGraph<Dim>::for_each_side_face(CellId c, int axis, int dir, Fn&& fn) co
 extern template class CellGraph<2>;
 extern template class CellGraph<3>;
 
-}  // namespace liquid
+}  // namespace liquid::tree

@@ -19,7 +19,7 @@
 #include "liquid/core/error.hpp"
 #include "liquid/tree/cell_graph.hpp"
 
-namespace liquid {
+namespace liquid::tree {
 
 namespace {
 
@@ -349,4 +349,4 @@ CellGraph<Dim> CellGraph<Dim>::build(const Box<Dim>& domain, const Predicate& re
 template CellGraph<2> CellGraph<2>::build(const Box<2>&, const Predicate&, const CellGraphOptions<2>&);
 template CellGraph<3> CellGraph<3>::build(const Box<3>&, const Predicate&, const CellGraphOptions<3>&);
 
-}  // namespace liquid
+}  // namespace liquid::tree

@@ -15,7 +15,7 @@
 #include "liquid/core/error.hpp"
 #include "liquid/tree/cell_graph.hpp"
 
-namespace liquid {
+namespace liquid::tree {
 
 namespace {
 using Terms = std::vector<std::pair<FaceId, double>>;
@@ -393,4 +393,4 @@ LIQUID_CELL_GRAPH_CHANGE(2)
 LIQUID_CELL_GRAPH_CHANGE(3)
 #undef LIQUID_CELL_GRAPH_CHANGE
 
-}  // namespace liquid
+}  // namespace liquid::tree

@@ -13,7 +13,7 @@
 #include "liquid/core/error.hpp"
 #include "liquid/tree/cell_graph.hpp"
 
-namespace liquid {
+namespace liquid::tree {
 
 template <int Dim>
 InvariantReport CellGraph<Dim>::check_invariants() const {
@@ -167,4 +167,4 @@ InvariantReport CellGraph<Dim>::check_invariants() const {
 template InvariantReport CellGraph<2>::check_invariants() const;
 template InvariantReport CellGraph<3>::check_invariants() const;
 
-}  // namespace liquid
+}  // namespace liquid::tree

@@ -8,7 +8,7 @@
 #include "liquid/core/error.hpp"
 #include "liquid/tree/cell_graph.hpp"
 
-namespace liquid {
+namespace liquid::tree {
 
 template <int Dim>
 CellGraphState<Dim> CellGraph<Dim>::state() const {
@@ -149,4 +149,4 @@ template CellGraphState<3> CellGraph<3>::state() const;
 template CellGraph<2> CellGraph<2>::from_state(const CellGraphState<2>&);
 template CellGraph<3> CellGraph<3>::from_state(const CellGraphState<3>&);
 
-}  // namespace liquid
+}  // namespace liquid::tree

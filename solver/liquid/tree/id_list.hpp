@@ -5,7 +5,7 @@
 #include <algorithm>
 #include <cstdint>
 
-namespace liquid::detail {
+namespace liquid::tree::detail {
 
 class IdList {
  public:
@@ -88,4 +88,4 @@ class IdList {
   };
 };
 
-}  // namespace liquid::detail
+}  // namespace liquid::tree::detail

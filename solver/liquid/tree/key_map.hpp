@@ -7,7 +7,7 @@
 #include <cstdint>
 #include <vector>
 
-namespace liquid::detail {
+namespace liquid::tree::detail {
 
 class KeyMap {
  public:
@@ -129,4 +129,4 @@ class KeyMap {
   std::size_t size_ = 0;
 };
 
-}  // namespace liquid::detail
+}  // namespace liquid::tree::detail

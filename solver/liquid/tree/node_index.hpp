@@ -12,7 +12,7 @@
 #include "liquid/core/morton.hpp"
 #include "liquid/tree/key_map.hpp"
 
-namespace liquid::detail {
+namespace liquid::tree::detail {
 
 /// Index of the j-th child (j in [0, 2^(Dim-1))) on side (axis, upper) of a node: bit `axis` is
 /// `upper`, the other axes' bits are those of j in order.
@@ -128,4 +128,4 @@ class NodeIndex {
   std::int32_t root_ = 0;
 };
 
-}  // namespace liquid::detail
+}  // namespace liquid::tree::detail

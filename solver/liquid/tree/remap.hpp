@@ -15,7 +15,7 @@
 #include "liquid/core/error.hpp"
 #include "liquid/tree/cell_graph.hpp"
 
-namespace liquid::remap {
+namespace liquid::tree::remap {
 
 namespace detail {
 template <class T>
@@ -31,7 +31,7 @@ void apply(const std::vector<std::int32_t>& new_ids, const Origins& origins, std
                   what, old_size, s);
   if (field.size() < capacity) field.resize(capacity, field.empty() ? T{} : field.front());
   const long n = static_cast<long>(new_ids.size());
-#pragma omp parallel for schedule(static) if (n > ::liquid::detail::parallel_min)
+#pragma omp parallel for schedule(static) if (n > ::liquid::tree::detail::parallel_min)
   for (long i = 0; i < n; ++i) {
     const std::int32_t b = origins.begin[i], e = origins.begin[i + 1];
     T value = origins.weight[b] * field[origins.source[b]];
@@ -57,4 +57,4 @@ void face_field(const CellGraph<Dim>& graph, const AdaptReport& report, std::vec
                 "face");
 }
 
-}  // namespace liquid::remap
+}  // namespace liquid::tree::remap

@@ -248,9 +248,9 @@ TEST_F(SeriesWriterTest, SampleForTheXdmfChecker) {
   const char* sample = std::getenv("LIQUID_IO_SAMPLE_DIR");
   const std::filesystem::path dir = sample ? std::filesystem::path(sample) : dir_;
   io::SeriesWriter series_2d((dir / "series-2d.xmf").string()), series_3d((dir / "series-3d.xmf").string());
-  const CellGraph<2> tree = tree::uniform<2>(Box<2>{}, 2);
+  const tree::CellGraph<2> tree = tree::uniform<2>(Box<2>{}, 2);
   std::vector<double> phi(tree.cell_capacity(), 0.0);
-  tree.for_each_cell([&](CellId c) { phi[c] = tree.centre(c).norm() - 0.5; });
+  tree.for_each_cell([&](tree::CellId c) { phi[c] = tree.centre(c).norm() - 0.5; });
   const std::vector<io::CellField> cell_fields{{"phi", phi}};
   for (int frame = 0; frame < 2; ++frame) {
     const int n = frame == 0 ? 6 : 0;

@@ -40,17 +40,17 @@ TYPED_TEST(TreeOutputTest, XdmfReferencesMatchTheHdf5Datasets) {
   constexpr int Dim = TypeParam::value;
   const auto dir = std::filesystem::temp_directory_path() / ("liquid_tree_output_" + std::to_string(Dim));
   std::filesystem::create_directories(dir);
-  CellGraphOptions<Dim> options;
+  tree::CellGraphOptions<Dim> options;
   options.max_jump = 3;
   auto g = tree::random<Dim>(Box<Dim>{}, 4, 1, Dim == 2 ? 6 : 4, 0.4, options);
   // Remove a few cells so ids have holes and rows differ from ids.
-  for (CellId c : g.cell_ids())
+  for (tree::CellId c : g.cell_ids())
     if (g.alive(c) && g.can_merge(c)) {
       g.merge(*g.siblings(c));
       break;
     }
   std::vector<double> x(g.cell_capacity(), -1.0), lvl2(g.cell_capacity(), 0.0);
-  g.for_each_cell([&](CellId c) {
+  g.for_each_cell([&](tree::CellId c) {
     x[c] = g.centre(c)[0];
     lvl2[c] = 2.0 * g.level(c);
   });

@@ -17,9 +17,9 @@ namespace liquid::mac {
 namespace {
 
 template <int Dim>
-CellGraph<Dim> non_graded(int level, double half_width = 1.0) {
+tree::CellGraph<Dim> non_graded(int level, double half_width = 1.0) {
   const Box<Dim> domain{Vec<Dim>::Constant(-half_width), Vec<Dim>::Constant(half_width)};
-  CellGraphOptions<Dim> options;
+  tree::CellGraphOptions<Dim> options;
   options.max_jump = 2;
   return tree::narrow_band<Dim>(domain, levelset::sphere<Dim>(Vec<Dim>::Constant(0.1), 0.55), level,
                                 level + 2, 2.0, options);
@@ -48,7 +48,7 @@ double quad_laplacian(const Vec<Dim>&) {
 // The L-inf distance of the direct solution of `sys` from quad at the unknowns' centres; the
 // solution goes to `solution` when given.
 template <int Dim>
-double direct_error_against_quad(const CellGraph<Dim>& graph, const PoissonSystem<Dim>& sys,
+double direct_error_against_quad(const tree::CellGraph<Dim>& graph, const PoissonSystem<Dim>& sys,
                                  linalg::Vector* solution = nullptr) {
   linalg::Vector p;
   const auto st = linalg::solve(sys.A, sys.b, p, {linalg::SolverKind::direct});
@@ -63,7 +63,7 @@ double direct_error_against_quad(const CellGraph<Dim>& graph, const PoissonSyste
 
 template <int Dim>
 void dirichlet_quadratic_is_exact() {
-  const CellGraph<Dim> graph = non_graded<Dim>(Dim == 2 ? 4 : 2);
+  const tree::CellGraph<Dim> graph = non_graded<Dim>(Dim == 2 ? 4 : 2);
   PoissonProblem<Dim> problem;
   problem.f = quad_laplacian<Dim>;
   problem.boundary.levelset = levelset::sphere<Dim>(Vec<Dim>::Constant(0.05), 0.7);
@@ -77,7 +77,7 @@ void dirichlet_quadratic_is_exact() {
   const auto dn = face_normal_derivative<Dim>(graph, sys, PoissonOptions{}, p);
   double err_grad = 0.0;
   long n_faces = 0;
-  graph.for_each_face([&](FaceId f) {
+  graph.for_each_face([&](tree::FaceId f) {
     if (std::isnan(dn[f])) return;
     ++n_faces;
     err_grad =
@@ -91,13 +91,14 @@ void dirichlet_quadratic_is_exact() {
 /// Exact for quadratics, and so are the face derivatives between unknowns and air cells.
 template <int Dim>
 void air_cells_quadratic_is_exact() {
-  const CellGraph<Dim> graph = non_graded<Dim>(Dim == 2 ? 4 : 2);
+  const tree::CellGraph<Dim> graph = non_graded<Dim>(Dim == 2 ? 4 : 2);
   const auto blob = levelset::sphere<Dim>(Vec<Dim>::Constant(0.05), 0.7);
   PoissonProblem<Dim> problem;
   problem.f_cells.assign(graph.cell_capacity(), quad_laplacian<Dim>(Vec<Dim>::Zero()));
   problem.boundary.dirichlet = quad<Dim>;
   problem.boundary.unknown_cells.assign(graph.cell_capacity(), 0);
-  graph.for_each_cell([&](CellId c) { problem.boundary.unknown_cells[c] = blob(graph.centre(c)) < 0.0; });
+  graph.for_each_cell(
+      [&](tree::CellId c) { problem.boundary.unknown_cells[c] = blob(graph.centre(c)) < 0.0; });
   const PoissonSystem<Dim> sys = assemble_poisson<Dim>(graph, problem, PoissonOptions{});
   EXPECT_FALSE(sys.singular);
   EXPECT_GT(sys.stats.n_rbf_rows, 0);
@@ -106,8 +107,8 @@ void air_cells_quadratic_is_exact() {
   const auto dn = face_normal_derivative<Dim>(graph, sys, PoissonOptions{}, p);
   double err_grad = 0.0;
   long n_air_faces = 0;
-  graph.for_each_face([&](FaceId f) {
-    const GraphFace& g = graph.face(f);
+  graph.for_each_face([&](tree::FaceId f) {
+    const tree::GraphFace& g = graph.face(f);
     if (g.is_boundary()) return;
     const bool a = sys.layout.is_unknown(g.cell[0]), b = sys.layout.is_unknown(g.cell[1]);
     if (!a && !b) {
@@ -141,7 +142,7 @@ TEST(Poisson, DirichletQuadraticIsExactOnNonGradedOctree) {
 // a central difference about the wall, so FD and RBF-FD rows beside walls stay exact.
 template <int Dim>
 void inhomogeneous_neumann_quadratic_is_exact() {
-  const CellGraph<Dim> graph = non_graded<Dim>(Dim == 2 ? 4 : 2);
+  const tree::CellGraph<Dim> graph = non_graded<Dim>(Dim == 2 ? 4 : 2);
   PoissonProblem<Dim> problem;
   problem.f = quad_laplacian<Dim>;
   problem.pin_value = quad<Dim>;
@@ -150,7 +151,7 @@ void inhomogeneous_neumann_quadratic_is_exact() {
   };
   const PoissonSystem<Dim> sys = assemble_poisson<Dim>(graph, problem, PoissonOptions{});
   ASSERT_TRUE(sys.singular);
-  EXPECT_NE(sys.pinned, no_cell);
+  EXPECT_NE(sys.pinned, tree::no_cell);
   EXPECT_LT(direct_error_against_quad<Dim>(graph, sys), 1e-8);
   // Without the flux the same system misses p by O(1): the test can fail.
   problem.boundary.wall_flux = nullptr;
@@ -162,7 +163,7 @@ void inhomogeneous_neumann_quadratic_is_exact() {
 // gradients stay exact for quadratics, and no stencil holds more than the cap plus the nodes tied
 // with its last one, where whole rings hold more. It applies to the ring rule alone.
 TEST(Poisson, RingCapBoundsTheStencilsAndKeepsQuadraticsExact) {
-  const CellGraph<3> graph = non_graded<3>(2);
+  const tree::CellGraph<3> graph = non_graded<3>(2);
   PoissonProblem<3> problem;
   problem.f = quad_laplacian<3>;
   problem.boundary.levelset = levelset::sphere<3>(Vec<3>::Constant(0.05), 0.7);
@@ -190,7 +191,7 @@ TEST(Poisson, RingCapBoundsTheStencilsAndKeepsQuadraticsExact) {
   ASSERT_LT(direct_error_against_quad<3>(graph, b, &p), 1e-9);
   const auto dn = face_normal_derivative<3>(graph, b, capped, p);
   double err_grad = 0.0;
-  graph.for_each_face([&](FaceId f) {
+  graph.for_each_face([&](tree::FaceId f) {
     if (!std::isnan(dn[f]))
       err_grad =
           std::max(err_grad, std::abs(dn[f] - quad_gradient<3>(graph.face_centre(f))[graph.face(f).axis]));
@@ -208,7 +209,7 @@ TEST(Poisson, RingCapBoundsTheStencilsAndKeepsQuadraticsExact) {
   tight.ring_cap = 1.0;
   const auto g_capped = face_normal_derivative<3>(graph, b, tight, q);
   double differ = 0.0;
-  graph.for_each_face([&](FaceId f) {
+  graph.for_each_face([&](tree::FaceId f) {
     if (std::isfinite(g_whole[f]) && std::isfinite(g_capped[f]))
       differ = std::max(differ, std::abs(g_whole[f] - g_capped[f]));
   });
@@ -224,7 +225,7 @@ TEST(Poisson, InhomogeneousNeumannQuadraticIsExactOnNonGradedOctree) {
 
 TEST(Poisson, LevelSetNegativeEverywhereIsSingularAndPinned) {
   // No Dirichlet value anywhere: the system is pinned like a pure Neumann one, not left singular.
-  const CellGraph<2> graph = non_graded<2>(3);
+  const tree::CellGraph<2> graph = non_graded<2>(3);
   PoissonProblem<2> problem;
   problem.f = quad_laplacian<2>;
   problem.pin_value = quad<2>;
@@ -233,12 +234,12 @@ TEST(Poisson, LevelSetNegativeEverywhereIsSingularAndPinned) {
   problem.boundary.wall_flux = [](const Vec<2>& x, const Vec<2>& n) { return quad_gradient<2>(x).dot(n); };
   const PoissonSystem<2> sys = assemble_poisson<2>(graph, problem, PoissonOptions{});
   EXPECT_TRUE(sys.singular);
-  EXPECT_NE(sys.pinned, no_cell);
+  EXPECT_NE(sys.pinned, tree::no_cell);
   EXPECT_LT(direct_error_against_quad<2>(graph, sys), 1e-8);
 }
 
 TEST(Poisson, NonFiniteRightHandSideNamesTheCell) {
-  const CellGraph<2> graph = non_graded<2>(3);
+  const tree::CellGraph<2> graph = non_graded<2>(3);
   PoissonProblem<2> problem;
   problem.f = [](const Vec<2>& x) { return std::log(x[0]); };  // NaN for x < 0
   problem.pin_value = quad<2>;
@@ -254,7 +255,7 @@ TEST(Poisson, NonFiniteRightHandSideNamesTheCell) {
 
 TEST(Poisson, InteriorRowsAreExactForQuadratics) {
   // Away from walls every row (FD or RBF-FD) reproduces -Lap of a quadratic exactly.
-  const CellGraph<2> graph = non_graded<2>(3, 2.0);  // coarse cells of 0.5, band of 0.125
+  const tree::CellGraph<2> graph = non_graded<2>(3, 2.0);  // coarse cells of 0.5, band of 0.125
   PoissonProblem<2> problem;
   problem.f = quad_laplacian<2>;
   problem.pin_value = quad<2>;
@@ -264,7 +265,7 @@ TEST(Poisson, InteriorRowsAreExactForQuadratics) {
   const linalg::Vector residual = sys.A * pe - sys.b;
   long n_checked = 0;
   for (long i = 0; i < sys.n_unknowns(); ++i) {
-    const CellId c = sys.layout.cell_of_dof[i];
+    const tree::CellId c = sys.layout.cell_of_dof[i];
     const Box<2> b = graph.box(c);
     const double margin = 1.5;  // three coarse cells: no stencil reaches a wall's mirror nodes
     if ((b.lo.array() < -2 + margin).any() || (b.hi.array() > 2 - margin).any()) continue;
@@ -277,7 +278,7 @@ TEST(Poisson, InteriorRowsAreExactForQuadratics) {
 
 TEST(Poisson, NeumannWallGhostsFoldIntoTheRow) {
   // Row sums of a pure Neumann Laplacian vanish (constants are in its null space), walls included.
-  const CellGraph<3> graph = non_graded<3>(2);
+  const tree::CellGraph<3> graph = non_graded<3>(2);
   PoissonProblem<3> problem;
   problem.f = [](const Vec<3>&) { return 0.0; };
   PoissonOptions options;
@@ -294,7 +295,7 @@ TEST(Poisson, NeumannWallGhostsFoldIntoTheRow) {
 }
 
 TEST(Poisson, ZeroMeanAndPinnedSolutionsDifferByAConstant) {
-  const CellGraph<2> graph = non_graded<2>(5);
+  const tree::CellGraph<2> graph = non_graded<2>(5);
   // cos(pi x) cos(pi y) has zero normal derivative on the walls of [-1, 1]^2.
   const double pi = std::acos(-1.0);
   auto exact = [pi](const Vec<2>& x) { return std::cos(pi * x[0]) * std::cos(pi * x[1]); };
@@ -305,7 +306,7 @@ TEST(Poisson, ZeroMeanAndPinnedSolutionsDifferByAConstant) {
   mean.nullspace = Nullspace::zero_mean;
   const auto a = assemble_poisson<2>(graph, problem, pin);
   const auto b = assemble_poisson<2>(graph, problem, mean);
-  EXPECT_NE(a.pinned, no_cell);
+  EXPECT_NE(a.pinned, tree::no_cell);
   linalg::Vector pa, pb;
   ASSERT_TRUE(linalg::solve(a.A, a.b, pa, {linalg::SolverKind::direct}).converged());
   ASSERT_TRUE(linalg::solve(b.A, b.b, pb, {linalg::SolverKind::direct}).converged());
@@ -320,7 +321,7 @@ TEST(Poisson, ZeroMeanAndPinnedSolutionsDifferByAConstant) {
 }
 
 TEST(Poisson, BadInputIsNamed) {
-  const CellGraph<2> graph = tree::uniform<2>(Box<2>{Vec<2>::Zero(), Vec<2>::Ones()}, 3);
+  const tree::CellGraph<2> graph = tree::uniform<2>(Box<2>{Vec<2>::Zero(), Vec<2>::Ones()}, 3);
   PoissonProblem<2> problem;
   problem.f = [](const Vec<2>&) { return 1.0; };
   problem.boundary.levelset = levelset::sphere<2>(Vec<2>(5, 5), 0.1);  // outside the domain
@@ -342,13 +343,13 @@ namespace {
 
 template <int Dim>
 void dirichlet_walls_quadratic_is_exact() {
-  const CellGraph<Dim> graph = non_graded<Dim>(Dim == 2 ? 3 : 2);
+  const tree::CellGraph<Dim> graph = non_graded<Dim>(Dim == 2 ? 3 : 2);
   PoissonProblem<Dim> problem;
   problem.f = quad_laplacian<Dim>;
   problem.boundary.dirichlet = quad<Dim>;
   problem.boundary.dirichlet_walls = true;
   const PoissonSystem<Dim> sys = assemble_poisson<Dim>(graph, problem, PoissonOptions{});
-  EXPECT_EQ(sys.pinned, no_cell);
+  EXPECT_EQ(sys.pinned, tree::no_cell);
   linalg::Vector p;
   ASSERT_TRUE(linalg::solve(sys.A, sys.b, p, {linalg::SolverKind::direct}).converged());
   double err = 0.0;
@@ -375,7 +376,7 @@ namespace {
 // (T-junction layouts repeat, so the cache is used) and on a level-set problem (interface
 // crossings bypass it).
 template <int Dim>
-void check_cache_changes_nothing(const PoissonProblem<Dim>& problem, const CellGraph<Dim>& graph,
+void check_cache_changes_nothing(const PoissonProblem<Dim>& problem, const tree::CellGraph<Dim>& graph,
                                  bool expect_hits) {
   PoissonOptions on, off;
   off.cache_weights = false;
@@ -430,7 +431,7 @@ PoissonProblem<3> neumann_quadratic() {
   neumann.pin_value = quad<3>;
   return neumann;
 }
-CellGraph<3> plane_band(int coarse, int fine) {
+tree::CellGraph<3> plane_band(int coarse, int fine) {
   const Box<3> box{Vec<3>::Constant(-2.0), Vec<3>::Constant(2.0)};
   return tree::narrow_band<3>(
       box, [](const Vec<3>& x) { return x[2] - 0.3; }, coarse, fine, 2.0);
@@ -451,7 +452,7 @@ TEST(Poisson, WeightCacheChangesOnlyRoundOff) {
 // it has been emptied for being full.
 TEST(Poisson, WeightCacheKeptAcrossAssembliesGivesTheSameBits) {
   const PoissonProblem<3> neumann = neumann_quadratic();
-  const CellGraph<3> plane = plane_band(2, 4);
+  const tree::CellGraph<3> plane = plane_band(2, 4);
   const PoissonSystem<3> alone = assemble_poisson<3>(plane, neumann, PoissonOptions{});
   rbf::WeightCache<3> kept, small(0x1p-24, 16);
   for (int pass = 0; pass < 2; ++pass) {
@@ -501,7 +502,7 @@ Vec<Dim> beta_gradient(const Vec<Dim>& x) {
 template <int Dim>
 double variable_coefficient_error(int level, Outside outside) {
   const Box<Dim> domain{Vec<Dim>::Constant(-1.0), Vec<Dim>::Constant(1.0)};
-  const CellGraph<Dim> graph = tree::uniform<Dim>(domain, level);
+  const tree::CellGraph<Dim> graph = tree::uniform<Dim>(domain, level);
   PoissonProblem<Dim> problem;
   // div(beta grad p) for p = quad.
   problem.f = [](const Vec<Dim>& x) {
@@ -513,10 +514,12 @@ double variable_coefficient_error(int level, Outside outside) {
   if (outside == Outside::walls) problem.boundary.dirichlet_walls = true;
   if (outside == Outside::air_cells) {
     problem.boundary.unknown_cells.assign(graph.cell_capacity(), 0);
-    graph.for_each_cell([&](CellId c) { problem.boundary.unknown_cells[c] = ball(graph.centre(c)) < 0.0; });
+    graph.for_each_cell(
+        [&](tree::CellId c) { problem.boundary.unknown_cells[c] = ball(graph.centre(c)) < 0.0; });
   }
   problem.face_coefficient.assign(graph.face_capacity(), 0.0);
-  graph.for_each_face([&](FaceId f) { problem.face_coefficient[f] = beta_at<Dim>(graph.face_centre(f)); });
+  graph.for_each_face(
+      [&](tree::FaceId f) { problem.face_coefficient[f] = beta_at<Dim>(graph.face_centre(f)); });
   const PoissonSystem<Dim> sys = assemble_poisson<Dim>(graph, problem, PoissonOptions{});
   EXPECT_EQ(sys.stats.n_rbf_rows, 0);
   if (outside == Outside::air_cells) {
@@ -547,7 +550,7 @@ TEST(Poisson, VariableCoefficientIsSecondOrder3D) {
 }
 
 TEST(Poisson, VariableCoefficientNeedsFdRowsAndPositiveValues) {
-  const CellGraph<2> graph = non_graded<2>(3);
+  const tree::CellGraph<2> graph = non_graded<2>(3);
   PoissonProblem<2> problem;
   problem.f = quad_laplacian<2>;
   problem.boundary.dirichlet = quad<2>;
@@ -559,7 +562,7 @@ TEST(Poisson, VariableCoefficientNeedsFdRowsAndPositiveValues) {
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("needs an RBF-FD row"), std::string::npos) << e.what();
   }
-  const CellGraph<2> uniform = tree::uniform<2>(Box<2>{Vec<2>::Zero(), Vec<2>::Ones()}, 3);
+  const tree::CellGraph<2> uniform = tree::uniform<2>(Box<2>{Vec<2>::Zero(), Vec<2>::Ones()}, 3);
   problem.face_coefficient.assign(uniform.face_capacity(), 1.0);
   problem.face_coefficient[uniform.face_ids()[5]] = 0.0;
   try {

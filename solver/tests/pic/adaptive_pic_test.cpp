@@ -15,13 +15,13 @@ namespace liquid {
 namespace {
 
 template <int Dim>
-AdaptivePic<Dim> pool(bool adaptive, PicTransfer transfer, int fine) {
-  PicOptions<Dim> o;
+pic::AdaptivePic<Dim> pool(bool adaptive, pic::PicTransfer transfer, int fine) {
+  pic::PicOptions<Dim> o;
   o.adaptive = adaptive;
   o.transfer = transfer;
   o.finest_level = fine;
   o.coarse_level = fine - 2;
-  AdaptivePic<Dim> sim(o);
+  pic::AdaptivePic<Dim> sim(o);
   Vec<Dim> hi = Vec<Dim>::Ones();
   hi[1] = 0.5;
   sim.seed(levelset::box<Dim>({Vec<Dim>::Zero(), hi}));
@@ -29,10 +29,11 @@ AdaptivePic<Dim> pool(bool adaptive, PicTransfer transfer, int fine) {
 }
 
 TEST(AdaptivePic, StillPoolStaysStill2D) {
-  for (auto [adaptive, transfer] : {std::pair{true, PicTransfer::rbf}, std::pair{false, PicTransfer::apic}}) {
-    AdaptivePic<2> sim = pool<2>(adaptive, transfer, 5);
+  for (auto [adaptive, transfer] :
+       {std::pair{true, pic::PicTransfer::rbf}, std::pair{false, pic::PicTransfer::apic}}) {
+    pic::AdaptivePic<2> sim = pool<2>(adaptive, transfer, 5);
     for (int s = 0; s < 10; ++s) {
-      const PicStepReport r = sim.advance(0.01);
+      const pic::PicStepReport r = sim.advance(0.01);
       ASSERT_TRUE(r.ppe.converged()) << r.ppe.describe();
     }
     double vmax = 0.0;
@@ -49,13 +50,14 @@ TEST(AdaptivePic, StillPoolStaysStill2D) {
 TEST(AdaptivePic, DamBreakRunsStableAndSpreads2D) {
   // A column of liquid collapses: the front must advance, the speed stay below free fall from
   // the column's height (with margin), and nothing become NaN; adaptive RBF and regular APIC.
-  for (auto [adaptive, transfer] : {std::pair{true, PicTransfer::rbf}, std::pair{false, PicTransfer::apic}}) {
-    PicOptions<2> o;
+  for (auto [adaptive, transfer] :
+       {std::pair{true, pic::PicTransfer::rbf}, std::pair{false, pic::PicTransfer::apic}}) {
+    pic::PicOptions<2> o;
     o.adaptive = adaptive;
     o.transfer = transfer;
     o.finest_level = 5;
     o.coarse_level = 2;
-    AdaptivePic<2> sim(o);
+    pic::AdaptivePic<2> sim(o);
     sim.seed(levelset::box<2>({Vec<2>::Zero(), Vec<2>(0.4, 0.6)}));
     while (sim.time() < 0.2) sim.advance(sim.stable_dt(1.0, 0.01));
     double front = 0.0, vmax = 0.0;
@@ -69,18 +71,18 @@ TEST(AdaptivePic, DamBreakRunsStableAndSpreads2D) {
 // PicOptions::refine keeps its region at the finest level with no surface anywhere (a box full of
 // liquid), through steps; far from it the tree stays at the coarse level.
 TEST(AdaptivePic, RefinedRegionStaysFineWithoutASurface) {
-  PicOptions<2> o;
+  pic::PicOptions<2> o;
   o.gravity = Vec<2>::Zero();
   o.finest_level = 5;
   o.coarse_level = 3;
   o.refine = levelset::box<2>({Vec<2>::Constant(0.4), Vec<2>::Constant(0.6)});
-  AdaptivePic<2> sim(o);
+  pic::AdaptivePic<2> sim(o);
   sim.seed([](const Vec<2>&) { return -1.0; },
            [](const Vec<2>& x) { return Vec<2>(x[1] - 0.5, 0.5 - x[0]); });
   for (int step = 0; step < 3; ++step) sim.advance(0.01);
-  const CellGraph<2>& g = sim.graph();
+  const tree::CellGraph<2>& g = sim.graph();
   long inside = 0;
-  g.for_each_cell([&](CellId c) {
+  g.for_each_cell([&](tree::CellId c) {
     const Vec<2> x = g.centre(c);
     if (o.refine(x) < 0.0) {
       EXPECT_EQ(g.level(c), 5) << "cell " << c << " in the region";
@@ -91,9 +93,9 @@ TEST(AdaptivePic, RefinedRegionStaysFineWithoutASurface) {
     }
   });
   EXPECT_EQ(inside, 36);  // (0.2 / (1/32))^2 rounded to the cells whose centres are inside
-  PicOptions<2> plain = o;
+  pic::PicOptions<2> plain = o;
   plain.refine = {};
-  AdaptivePic<2> coarse(plain);
+  pic::AdaptivePic<2> coarse(plain);
   coarse.seed([](const Vec<2>&) { return -1.0; });
   EXPECT_EQ(coarse.graph().n_cells(), 64);  // no surface, no region: level 3 everywhere
 }
@@ -109,7 +111,7 @@ TEST(AdaptivePic, ClosedBoxPressureTakesZeroMeanNotAPinnedPointSource) {
     return Vec<2>(std::sin(x[0]) * std::cos(x[1]), -std::cos(x[0]) * std::sin(x[1]));
   };
   const auto run = [&](mac::Nullspace nullspace, double& centre_error, double& mean_pressure) {
-    PicOptions<2> o;
+    pic::PicOptions<2> o;
     o.domain = Box<2>{Vec<2>::Zero(), Vec<2>::Constant(M_PI)};
     o.gravity = Vec<2>::Zero();
     o.finest_level = 5;
@@ -117,21 +119,21 @@ TEST(AdaptivePic, ClosedBoxPressureTakesZeroMeanNotAPinnedPointSource) {
     o.refine = levelset::box<2>({Vec<2>::Constant(M_PI / 4), Vec<2>::Constant(3 * M_PI / 4)});
     o.poisson.nullspace = nullspace;
     o.apply_paper_preset();
-    AdaptivePic<2> sim(o);
+    pic::AdaptivePic<2> sim(o);
     sim.seed([](const Vec<2>&) { return -1.0; }, exact);
     for (int step = 0; step < 3; ++step) ASSERT_TRUE(sim.advance(sim.stable_dt(1.0, 1.0)).ppe.converged());
-    const CellGraph<2>& g = sim.graph();
+    const tree::CellGraph<2>& g = sim.graph();
     centre_error = 0.0;
-    g.for_each_face([&](FaceId f) {
+    g.for_each_face([&](tree::FaceId f) {
       const Vec<2> x = g.face_centre(f);
       if ((x - Vec<2>::Constant(M_PI / 2)).norm() < 2 * sim.finest_h())
         centre_error = std::max(centre_error, std::abs(sim.face_velocity()[f] - exact(x)[g.face(f).axis]));
     });
     double sum = 0.0, volume = 0.0;
-    g.for_each_cell([&](CellId c) { sum += sim.pressure()[c] * g.volume(c), volume += g.volume(c); });
+    g.for_each_cell([&](tree::CellId c) { sum += sim.pressure()[c] * g.volume(c), volume += g.volume(c); });
     mean_pressure = sum / volume;
   };
-  EXPECT_EQ(PicOptions<2>{}.poisson.nullspace, mac::Nullspace::zero_mean);
+  EXPECT_EQ(pic::PicOptions<2>{}.poisson.nullspace, mac::Nullspace::zero_mean);
   double mean_error = 0.0, mean_p = 0.0, pin_error = 0.0, pin_p = 0.0;
   run(mac::Nullspace::zero_mean, mean_error, mean_p);
   run(mac::Nullspace::pin, pin_error, pin_p);
@@ -144,46 +146,47 @@ TEST(AdaptivePic, ClosedBoxPressureTakesZeroMeanNotAPinnedPointSource) {
 // holds the seeding count, and every particle carries the given velocity. Seeding before the tree
 // settled left the split cells' children with one particle, or with new ones at rest.
 TEST(AdaptivePic, SeedingOnTheSettledTreeCarriesTheGivenVelocity) {
-  PicOptions<2> o;
+  pic::PicOptions<2> o;
   o.gravity = Vec<2>::Zero();
   o.finest_level = 5;
   o.coarse_level = 3;
   o.refine = levelset::box<2>({Vec<2>::Constant(0.3), Vec<2>::Constant(0.7)});
   const auto swirl = [](const Vec<2>& x) -> Vec<2> { return {x[1] - 0.25, 0.75 - x[0]}; };
-  AdaptivePic<2> sim(o);
+  pic::AdaptivePic<2> sim(o);
   sim.seed([](const Vec<2>&) { return -1.0; }, swirl);
-  const CellGraph<2>& g = sim.graph();
+  const tree::CellGraph<2>& g = sim.graph();
   ASSERT_GT(g.n_cells_at_level(5), 0);
   std::vector<int> count(g.cell_capacity(), 0);
-  const Particles<2>& p = sim.particles();
+  const particles::Particles<2>& p = sim.particles();
   for (int i = 0; i < p.size(); ++i) {
     ++count[g.locate(p.x[i])];
     EXPECT_LT((p.v[i] - swirl(p.x[i])).norm(), 1e-12) << "particle " << i;
   }
-  g.for_each_cell([&](CellId c) { EXPECT_EQ(count[c], 4) << "cell " << c << " at level " << g.level(c); });
+  g.for_each_cell(
+      [&](tree::CellId c) { EXPECT_EQ(count[c], 4) << "cell " << c << " at level " << g.level(c); });
 }
 
 TEST(AdaptivePic, PhasesClassifyAndMarkTheBand) {
   // A pool on a tree: fluid where particles are, the surface row under the air, band marks.
-  PicOptions<2> o;
+  pic::PicOptions<2> o;
   o.finest_level = 5;
   o.coarse_level = 3;
-  AdaptivePic<2> sim(o);
+  pic::AdaptivePic<2> sim(o);
   sim.seed(levelset::box<2>({Vec<2>::Zero(), Vec<2>(1.0, 0.5)}));
   const auto& cls = sim.classification();
   const auto& g = sim.graph();
   ASSERT_FALSE(cls.surface.empty());
-  for (CellId c : cls.surface) {
+  for (tree::CellId c : cls.surface) {
     EXPECT_TRUE(cls.is_fluid(c));
     EXPECT_EQ(g.level(c), 5);
     EXPECT_NEAR(g.box(c).hi[1], 0.5, 1e-12);
   }
-  for (CellId c : cls.fluid) EXPECT_LT(g.centre(c)[1], 0.5);
+  for (tree::CellId c : cls.fluid) EXPECT_LT(g.centre(c)[1], 0.5);
   // The settled tree: the band's marks change nothing more (merges the level jump refuses remain).
-  MarkList marks;
+  tree::MarkList marks;
   pic::mark_band<2>(g, cls.surface, o.band, o.coarse_level, o.finest_level, marks);
-  CellGraph<2> copy = g;
-  const AdaptReport r = copy.adapt(marks);
+  tree::CellGraph<2> copy = g;
+  const tree::AdaptReport r = copy.adapt(marks);
   EXPECT_EQ(r.n_split, 0);
   EXPECT_EQ(r.n_merged, 0);
   EXPECT_TRUE(marks.split.empty());
@@ -195,30 +198,30 @@ TEST(AdaptivePic, EnclosedEmptyCellsAreFluidAndOpenOnesAir) {
   // An 8 x 8 grid with one particle per cell in the lower half, except two cells: one enclosed
   // by fluid (a hole: fluid), one on the surface row with air above (air).
   const auto g = tree::uniform<2>(Box<2>{}, 3);
-  const CellId hole = g.locate(Vec<2>(0.44, 0.19)), notch = g.locate(Vec<2>(0.69, 0.44));
+  const tree::CellId hole = g.locate(Vec<2>(0.44, 0.19)), notch = g.locate(Vec<2>(0.69, 0.44));
   std::vector<Vec<2>> x;
-  g.for_each_cell([&](CellId c) {
+  g.for_each_cell([&](tree::CellId c) {
     if (g.centre(c)[1] < 0.5 && c != hole && c != notch) x.push_back(g.centre(c));
   });
-  CellBins bins;
-  bin_particles<2>(g, x, bins);
+  particles::CellBins bins;
+  particles::bin_particles<2>(g, x, bins);
   pic::Classification cls;
   pic::classify_cells<2>(g, bins, {}, cls);
   EXPECT_TRUE(cls.is_fluid(hole));
-  EXPECT_EQ(cls.filled, std::vector<CellId>{hole});
+  EXPECT_EQ(cls.filled, std::vector<tree::CellId>{hole});
   EXPECT_FALSE(cls.is_fluid(notch));
   EXPECT_EQ(static_cast<long>(cls.fluid.size()), 31);
   // Surface: the top fluid row (7 cells; the notch is air) and the cell below the notch.
-  for (CellId c : cls.surface) EXPECT_TRUE(cls.is_fluid(c));
+  for (tree::CellId c : cls.surface) EXPECT_TRUE(cls.is_fluid(c));
   EXPECT_EQ(static_cast<long>(cls.surface.size()), 8);
 }
 
 TEST(AdaptivePic, RunawaySpeedsAndNonFiniteStatesStopTheRun) {
-  PicOptions<2> o;
+  pic::PicOptions<2> o;
   o.finest_level = 4;
   o.coarse_level = 2;
   o.advect_cfl = 1e-4;  // any motion needs far more than 64 substeps
-  AdaptivePic<2> sim(o);
+  pic::AdaptivePic<2> sim(o);
   sim.seed(levelset::box<2>({Vec<2>::Zero(), Vec<2>(0.5, 0.5)}));
   try {
     sim.advance(0.01);
@@ -226,7 +229,7 @@ TEST(AdaptivePic, RunawaySpeedsAndNonFiniteStatesStopTheRun) {
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("substeps"), std::string::npos) << e.what();
   }
-  AdaptivePic<2> nan_run(PicOptions<2>{});
+  pic::AdaptivePic<2> nan_run(pic::PicOptions<2>{});
   try {
     nan_run.seed(levelset::box<2>({Vec<2>::Zero(), Vec<2>(0.5, 0.5)}),
                  [](const Vec<2>&) { return Vec<2>(std::nan(""), 0.0); });
@@ -237,33 +240,34 @@ TEST(AdaptivePic, RunawaySpeedsAndNonFiniteStatesStopTheRun) {
 }
 
 TEST(AdaptivePic, BadOptionsAndFailuresAreReported) {
-  PicOptions<2> o;
-  o.transfer = PicTransfer::apic;  // needs a uniform tree
-  EXPECT_THROW(AdaptivePic<2>{o}, Error);
+  pic::PicOptions<2> o;
+  o.transfer = pic::PicTransfer::apic;  // needs a uniform tree
+  EXPECT_THROW(pic::AdaptivePic<2>{o}, Error);
   o = {};
   o.coarse_level = 7;
   o.finest_level = 5;
-  EXPECT_THROW(AdaptivePic<2>{o}, Error);
-  EXPECT_THROW(parse_pic_transfer("sph"), Error);
-  EXPECT_THROW(parse_pic_projection("density"), Error);
+  EXPECT_THROW(pic::AdaptivePic<2>{o}, Error);
+  EXPECT_THROW(pic::parse_pic_transfer("sph"), Error);
+  EXPECT_THROW(pic::parse_pic_projection("density"), Error);
   o = {};
-  o.projection = PicProjection::mass;  // the adaptive RBF transfer has no face masses
-  EXPECT_THROW(AdaptivePic<2>{o}, Error);
-  o.projection = PicProjection::split;  // neither: refused, naming the projection chosen
+  o.projection = pic::PicProjection::mass;  // the adaptive RBF transfer has no face masses
+  EXPECT_THROW(pic::AdaptivePic<2>{o}, Error);
+  o.projection = pic::PicProjection::split;  // neither: refused, naming the projection chosen
   try {
-    AdaptivePic<2> refused(o);
+    pic::AdaptivePic<2> refused(o);
     ADD_FAILURE() << "the split projection with the RBF transfer must be refused";
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("split projection"), std::string::npos) << e.what();
   }
-  o.adaptive = false, o.transfer = PicTransfer::pic, o.min_face_mass = 0.0;
-  EXPECT_THROW(AdaptivePic<2>{o}, Error);
-  for (auto bad : {+[](PicOptions<2>& b) { b.band = -1; }, +[](PicOptions<2>& b) { b.max_jump = 0; },
-                   +[](PicOptions<2>& b) { b.flip = 1.5; }, +[](PicOptions<2>& b) { b.flip = std::nan(""); },
-                   +[](PicOptions<2>& b) { b.finest_level = 40; }}) {
-    PicOptions<2> b;
+  o.adaptive = false, o.transfer = pic::PicTransfer::pic, o.min_face_mass = 0.0;
+  EXPECT_THROW(pic::AdaptivePic<2>{o}, Error);
+  for (auto bad :
+       {+[](pic::PicOptions<2>& b) { b.band = -1; }, +[](pic::PicOptions<2>& b) { b.max_jump = 0; },
+        +[](pic::PicOptions<2>& b) { b.flip = 1.5; }, +[](pic::PicOptions<2>& b) { b.flip = std::nan(""); },
+        +[](pic::PicOptions<2>& b) { b.finest_level = 40; }}) {
+    pic::PicOptions<2> b;
     bad(b);
-    EXPECT_THROW(AdaptivePic<2>{b}, Error);
+    EXPECT_THROW(pic::AdaptivePic<2>{b}, Error);
   }
   o = {};
   o.finest_level = 4;
@@ -271,7 +275,7 @@ TEST(AdaptivePic, BadOptionsAndFailuresAreReported) {
   o.solver.max_iterations = 1;
   o.solver.tolerance = 1e-14;
   o.solver.kind = linalg::SolverKind::bicgstab_jacobi;
-  AdaptivePic<2> sim(o);
+  pic::AdaptivePic<2> sim(o);
   EXPECT_THROW(sim.advance(0.01), Error);  // not seeded
   sim.seed(levelset::box<2>({Vec<2>::Zero(), Vec<2>(0.5, 0.5)}));
   try {
@@ -287,14 +291,15 @@ TEST(AdaptivePic, StillPoolAroundASubmergedObstacleStaysStill) {
   // A box obstacle inside a pool: the PPE rows beside it take no flux through its faces, so the
   // hydrostatic pressure holds around it and nothing moves; no particle is ever inside it.
   const Box<2> obstacle{Vec<2>(0.375, 0.125), Vec<2>(0.625, 0.3125)};
-  for (auto [adaptive, transfer] : {std::pair{true, PicTransfer::rbf}, std::pair{false, PicTransfer::apic}}) {
-    PicOptions<2> o;
+  for (auto [adaptive, transfer] :
+       {std::pair{true, pic::PicTransfer::rbf}, std::pair{false, pic::PicTransfer::apic}}) {
+    pic::PicOptions<2> o;
     o.adaptive = adaptive;
     o.transfer = transfer;
     o.finest_level = 5;
     o.coarse_level = 3;
     o.solid = levelset::box<2>(obstacle);
-    AdaptivePic<2> sim(o);
+    pic::AdaptivePic<2> sim(o);
     sim.seed(levelset::box<2>({Vec<2>::Zero(), Vec<2>(1.0, 0.5)}));
     for (int s = 0; s < 10; ++s) ASSERT_TRUE(sim.advance(0.01).ppe.converged());
     double vmax = 0.0;
@@ -302,17 +307,17 @@ TEST(AdaptivePic, StillPoolAroundASubmergedObstacleStaysStill) {
     EXPECT_LT(vmax, 1e-2 * std::sqrt(9.81 * 0.5)) << to_string(transfer);
     for (const auto& x : sim.particles().x) EXPECT_GE(o.solid(x), -1e-9) << x.transpose();
     long solid_cells = 0;
-    sim.graph().for_each_cell([&](CellId c) { solid_cells += sim.classification().is_solid(c); });
+    sim.graph().for_each_cell([&](tree::CellId c) { solid_cells += sim.classification().is_solid(c); });
     EXPECT_GT(solid_cells, 0);
   }
 }
 
 TEST(AdaptivePic, ColumnFallingOnAnObstacleStaysOutOfIt) {
-  PicOptions<2> o;
+  pic::PicOptions<2> o;
   o.finest_level = 5;
   o.coarse_level = 2;
   o.solid = levelset::sphere<2>(Vec<2>(0.5, 0.25), 0.15);
-  AdaptivePic<2> sim(o);
+  pic::AdaptivePic<2> sim(o);
   sim.seed(levelset::box<2>({Vec<2>(0.35, 0.5), Vec<2>(0.65, 0.9)}));
   long pushed = 0;
   while (sim.time() < 0.3) pushed += sim.advance(sim.stable_dt(1.0, 0.01)).advect.pushed;
@@ -321,16 +326,16 @@ TEST(AdaptivePic, ColumnFallingOnAnObstacleStaysOutOfIt) {
 }
 
 TEST(AdaptivePic, SourceAddsLiquidOnlyWhileActive) {
-  PicOptions<2> o;
+  pic::PicOptions<2> o;
   o.finest_level = 5;
   o.coarse_level = 2;
-  PicSource<2> s;
+  pic::PicSource<2> s;
   s.region = levelset::box<2>({Vec<2>(0.05, 0.6), Vec<2>(0.2, 0.75)});
   s.velocity = Vec<2>(1.0, 0.0);
   s.start = 0.0;
   s.stop = 0.05;
   o.sources.push_back(s);
-  AdaptivePic<2> sim(o);
+  pic::AdaptivePic<2> sim(o);
   sim.seed(levelset::box<2>({Vec<2>::Zero(), Vec<2>(1.0, 0.1)}));
   const int before = sim.particles().size();
   long created = 0;
@@ -343,7 +348,7 @@ TEST(AdaptivePic, SourceAddsLiquidOnlyWhileActive) {
 }
 
 template <int Dim>
-void expect_identical(const Particles<Dim>& a, const Particles<Dim>& b) {
+void expect_identical(const particles::Particles<Dim>& a, const particles::Particles<Dim>& b) {
   ASSERT_EQ(a.size(), b.size());
   for (int i = 0; i < a.size(); ++i) {
     ASSERT_EQ(a.x[i], b.x[i]) << "particle " << i;  // bit for bit: the point of a restore
@@ -352,18 +357,19 @@ void expect_identical(const Particles<Dim>& a, const Particles<Dim>& b) {
 }
 
 TEST(AdaptivePic, RestoredSolverTakesTheSameStepsBitForBit) {
-  for (auto [adaptive, transfer] : {std::pair{true, PicTransfer::rbf}, std::pair{false, PicTransfer::apic}}) {
-    PicOptions<2> o;
+  for (auto [adaptive, transfer] :
+       {std::pair{true, pic::PicTransfer::rbf}, std::pair{false, pic::PicTransfer::apic}}) {
+    pic::PicOptions<2> o;
     o.adaptive = adaptive;
     o.transfer = transfer;
     o.finest_level = 5;
     o.coarse_level = 2;
     o.solid = levelset::box<2>({Vec<2>(0.6, 0.0), Vec<2>(0.7, 0.2)});
-    AdaptivePic<2> sim(o);
+    pic::AdaptivePic<2> sim(o);
     sim.seed(levelset::box<2>({Vec<2>::Zero(), Vec<2>(0.4, 0.6)}));
     for (int s = 0; s < 4; ++s) sim.advance(sim.stable_dt(1.0, 0.01));
-    const PicState<2> saved = sim.state();
-    AdaptivePic<2> resumed(o);
+    const pic::PicState<2> saved = sim.state();
+    pic::AdaptivePic<2> resumed(o);
     resumed.restore(saved);
     EXPECT_EQ(resumed.steps(), sim.steps());
     for (int s = 0; s < 4; ++s) {
@@ -376,9 +382,9 @@ TEST(AdaptivePic, RestoredSolverTakesTheSameStepsBitForBit) {
     EXPECT_EQ(sim.graph().n_cells(), resumed.graph().n_cells());
     EXPECT_TRUE(std::equal(sim.pressure().begin(), sim.pressure().end(), resumed.pressure().begin()));
     // A state that does not fit is refused with the reason.
-    PicOptions<2> other = o;
+    pic::PicOptions<2> other = o;
     other.finest_level = 6;
-    AdaptivePic<2> wrong(other);
+    pic::AdaptivePic<2> wrong(other);
     EXPECT_THROW(wrong.restore(saved), Error);
   }
 }
@@ -390,17 +396,17 @@ TEST(AdaptivePic, LevelSetSurfaceHalvesThePoolsPressureError) {
   // 1.3% of sqrt(gH) (air cells: round-off); bounded here at 2%.
   double error[2] = {0.0, 0.0}, speed[2] = {0.0, 0.0};
   for (int k = 0; k < 2; ++k) {
-    PicOptions<2> o;
+    pic::PicOptions<2> o;
     o.finest_level = 6;
     o.coarse_level = 3;
-    if (k == 1) o.surface = PicSurface::levelset;
-    AdaptivePic<2> sim(o);
+    if (k == 1) o.surface = pic::PicSurface::levelset;
+    pic::AdaptivePic<2> sim(o);
     sim.seed(levelset::box<2>({Vec<2>::Zero(), Vec<2>(1.0, 0.5)}));
     for (int s = 0; s < 50; ++s) {
       ASSERT_TRUE(sim.advance(0.01).ppe.converged());
       for (const auto& v : sim.particles().v) speed[k] = std::max(speed[k], v.norm());
     }
-    for (CellId c : sim.classification().fluid)
+    for (tree::CellId c : sim.classification().fluid)
       error[k] = std::max(error[k], std::abs(sim.pressure()[c] - 9.81 * (0.5 - sim.graph().centre(c)[1])));
   }
   EXPECT_LT(error[1], 0.5 * error[0]) << "air cells " << error[0] << ", level set " << error[1];
@@ -413,12 +419,13 @@ TEST(AdaptivePic, LevelSetSurfaceHalvesThePoolsPressureError) {
 // and the two give different flows (beta is not 1 everywhere).
 TEST(AdaptivePic, MassProjectionLeavesTheLiquidDivergenceFree) {
   std::vector<double> u[3];
-  for (const PicProjection projection : {PicProjection::volume, PicProjection::mass, PicProjection::split}) {
-    PicOptions<2> o;
-    o.adaptive = false, o.transfer = PicTransfer::pic, o.finest_level = 5, o.reseed = false;
+  for (const pic::PicProjection projection :
+       {pic::PicProjection::volume, pic::PicProjection::mass, pic::PicProjection::split}) {
+    pic::PicOptions<2> o;
+    o.adaptive = false, o.transfer = pic::PicTransfer::pic, o.finest_level = 5, o.reseed = false;
     o.projection = projection;
     o.solver.tolerance = 1e-10;
-    AdaptivePic<2> sim(o);
+    pic::AdaptivePic<2> sim(o);
     sim.seed(levelset::box<2>({Vec<2>::Zero(), Vec<2>(0.4, 0.6)}));
     for (int s = 0; s < 8; ++s) {
       sim.advance(sim.stable_dt(1.0, 0.01));
@@ -426,7 +433,7 @@ TEST(AdaptivePic, MassProjectionLeavesTheLiquidDivergenceFree) {
       const std::vector<double> div = mac::fv_divergence<2>(sim.graph(), faces);
       double umax = 0.0, worst = 0.0;
       for (double v : faces) umax = std::max(umax, std::abs(v));
-      for (CellId c : sim.classification().fluid) worst = std::max(worst, std::abs(div[c]));
+      for (tree::CellId c : sim.classification().fluid) worst = std::max(worst, std::abs(div[c]));
       const double h = sim.finest_h();
       EXPECT_LT(worst * h, 1e-6 * umax) << to_string(projection) << ", step " << s;
     }
@@ -436,7 +443,7 @@ TEST(AdaptivePic, MassProjectionLeavesTheLiquidDivergenceFree) {
   for (int k : {1, 2}) {
     double differ = 0.0;
     for (std::size_t f = 0; f < u[0].size(); ++f) differ = std::max(differ, std::abs(u[0][f] - u[k][f]));
-    EXPECT_GT(differ, 1e-4) << "the " << to_string(static_cast<PicProjection>(k))
+    EXPECT_GT(differ, 1e-4) << "the " << to_string(static_cast<pic::PicProjection>(k))
                             << " projection gave the volume projection's flow";
   }
 }
@@ -446,35 +453,35 @@ TEST(AdaptivePic, SplitProjectionKeepsAStillPoolStill) {
   // however unevenly the particles sample it; the mass projection alone stirs it (hydrostatic-pool).
   // A pool of depth 0.5 at level 5, 0.5 s: the largest particle speed, and the pressure's largest
   // distance from the hydrostatic g (0.5 - y) over the fluid cells at the end.
-  const auto pool = [](PicProjection projection, PicSurface surface) {
-    PicOptions<2> o;
-    o.adaptive = false, o.transfer = PicTransfer::pic, o.finest_level = 5, o.coarse_level = 5;
+  const auto pool = [](pic::PicProjection projection, pic::PicSurface surface) {
+    pic::PicOptions<2> o;
+    o.adaptive = false, o.transfer = pic::PicTransfer::pic, o.finest_level = 5, o.coarse_level = 5;
     o.projection = projection, o.surface = surface;
     o.solver.tolerance = 1e-10;
-    AdaptivePic<2> sim(o);
+    pic::AdaptivePic<2> sim(o);
     sim.seed(levelset::box<2>({Vec<2>::Zero(), Vec<2>(1.0, 0.5)}));
     double speed = 0.0, pressure = 0.0;
     for (int s = 0; s < 50; ++s) {
       sim.advance(0.01);
       for (const Vec<2>& q : sim.particles().v) speed = std::max(speed, q.norm());
     }
-    for (CellId c : sim.classification().fluid)
+    for (tree::CellId c : sim.classification().fluid)
       pressure = std::max(pressure, std::abs(sim.pressure()[c] - 9.81 * (0.5 - sim.graph().centre(c)[1])));
     return std::pair{speed, pressure / sim.finest_h()};
   };
   const double scale = std::sqrt(9.81 * 0.5);
-  const auto [split, split_pressure] = pool(PicProjection::split, PicSurface::air_cells);
+  const auto [split, split_pressure] = pool(pic::PicProjection::split, pic::PicSurface::air_cells);
   EXPECT_LT(split, 1e-6 * scale) << "the split projection stirred the still pool";
   // The cells' pressure is the sum of the two passes': the hydrostatic one.
   EXPECT_LT(split_pressure, 2.0 * 9.81) << "split: the pool's pressure is not hydrostatic";
-  EXPECT_GT(pool(PicProjection::mass, PicSurface::air_cells).first, 1e-3 * scale)
+  EXPECT_GT(pool(pic::PicProjection::mass, pic::PicSurface::air_cells).first, 1e-3 * scale)
       << "the mass projection kept the pool still: the test has no contrast";
   // With the particles' level set as the surface (built once a step, used by both passes), the pool
   // is not still under any projection (the surface is as bumpy as the particles; measured: volume
   // 8.8e-3, split 9.8e-3, mass 4.6e-2 sqrt(gH)); the split must add no stirring of its own beyond
   // the volume projection's.
-  EXPECT_LT(pool(PicProjection::split, PicSurface::levelset).first,
-            1.5 * pool(PicProjection::volume, PicSurface::levelset).first)
+  EXPECT_LT(pool(pic::PicProjection::split, pic::PicSurface::levelset).first,
+            1.5 * pool(pic::PicProjection::volume, pic::PicSurface::levelset).first)
       << "with the level-set surface the split projection stirred the pool more than the volume projection";
 }
 
@@ -489,18 +496,18 @@ struct WorkBudget {
   bool finite = true;                                        ///< W was a number at every step
 };
 
-WorkBudget work_budget(PicTransfer transfer, PicProjection projection) {
-  PicOptions<2> o;
+WorkBudget work_budget(pic::PicTransfer transfer, pic::PicProjection projection) {
+  pic::PicOptions<2> o;
   o.adaptive = false, o.transfer = transfer, o.finest_level = 5, o.coarse_level = 5;
   o.reseed = false, o.projection = projection;
-  AdaptivePic<2> sim(o);
+  pic::AdaptivePic<2> sim(o);
   sim.seed(levelset::box<2>({Vec<2>::Zero(), Vec<2>(0.4, 0.6)}));
-  const RegularLattice<2> lattice(sim.graph());
+  const transfer::RegularLattice<2> lattice(sim.graph());
   const auto energy = [&] {
     double e = 0.0;
-    if (transfer == PicTransfer::apic)
-      e = particle_affine_energy<2>(lattice, sim.particles(),
-                                    sim.particles().field(sim.particles().field_index("apic")));
+    if (transfer == pic::PicTransfer::apic)
+      e = transfer::particle_affine_energy<2>(lattice, sim.particles(),
+                                              sim.particles().field(sim.particles().field_index("apic")));
     for (int i = 0; i < sim.particles().size(); ++i)
       e += 0.5 * sim.particles().v[i].squaredNorm() + 9.81 * sim.particles().x[i][1];
     return e;
@@ -509,7 +516,7 @@ WorkBudget work_budget(PicTransfer transfer, PicProjection projection) {
   b.e0 = energy();
   double before = b.e0;
   while (sim.time() < 0.5 - 1e-12) {
-    const PicStepReport r = sim.advance(std::min(sim.stable_dt(1.0, 0.01), 0.5 - sim.time()));
+    const pic::PicStepReport r = sim.advance(std::min(sim.stable_dt(1.0, 0.01), 0.5 - sim.time()));
     const double e = energy();
     b.finite = b.finite && std::isfinite(r.pressure_work);
     b.beyond = std::max(b.beyond, e - before - r.pressure_work);
@@ -526,12 +533,12 @@ TEST(AdaptivePic, ThePressuresWorkInMassesBoundsEachStepsRiseOfEnergy) {
   // applied in volumes did in the transferred masses (the split projection: the gravity pass's).
   // Where W is negative the bound demands a loss (measured: W down to -9.6e-4 E(0) a step, E
   // falling 2.7e-3). The mass projection applies no pressure in volumes: W = 0.
-  const WorkBudget split = work_budget(PicTransfer::pic, PicProjection::split);
+  const WorkBudget split = work_budget(pic::PicTransfer::pic, pic::PicProjection::split);
   EXPECT_TRUE(split.finite);
   EXPECT_LE(split.beyond, 1e-9 * split.e0)
       << "a PIC step raised E by more than the pressure's work in masses";
   EXPECT_LT(split.least_work, -1e-4 * split.e0) << "W was never negative: the bound was not put to the test";
-  const WorkBudget mass = work_budget(PicTransfer::pic, PicProjection::mass);
+  const WorkBudget mass = work_budget(pic::PicTransfer::pic, pic::PicProjection::mass);
   EXPECT_TRUE(mass.finite);
   // Exactly 0: the mass projection applies no pressure in volumes, so no face adds to W.
   EXPECT_EQ(mass.least_work, 0.0);
@@ -542,14 +549,14 @@ TEST(AdaptivePic, ThePressuresWorkInMassesBoundsEachStepsRiseOfEnergy) {
   // E(0)), but at level 5 its split rise is W's: the steps that raised E (by up to 3.6e-4 E(0))
   // stayed below W by at least 3.8e-5 (measured). Without the gravity pass's term in W, or with
   // its sign turned, this fails.
-  const WorkBudget apic = work_budget(PicTransfer::apic, PicProjection::split);
+  const WorkBudget apic = work_budget(pic::PicTransfer::apic, pic::PicProjection::split);
   EXPECT_LE(apic.beyond, 1e-9 * apic.e0)
       << "an APIC step raised E by more than the pressure's work in masses";
   EXPECT_GT(apic.rise, 1e-4 * apic.e0) << "APIC's E did not rise: the check has no contrast";
   // The RBF transfers give the faces no masses: no work to report.
-  PicOptions<2> o;
-  o.adaptive = false, o.transfer = PicTransfer::rbf, o.finest_level = 3, o.coarse_level = 3;
-  AdaptivePic<2> sim(o);
+  pic::PicOptions<2> o;
+  o.adaptive = false, o.transfer = pic::PicTransfer::rbf, o.finest_level = 3, o.coarse_level = 3;
+  pic::AdaptivePic<2> sim(o);
   sim.seed(levelset::box<2>({Vec<2>::Zero(), Vec<2>(0.4, 0.6)}));
   EXPECT_TRUE(std::isnan(sim.advance(0.01).pressure_work));
 }

@@ -24,26 +24,26 @@ std::string temp_folder(const std::string& name) {
 }
 
 TEST(Scene, EveryBuiltinSceneLoadsInItsDimension) {
-  const auto scenes = builtin_scenes();
+  const auto scenes = scene::builtin_scenes();
   ASSERT_GE(scenes.size(), 14u);  // seven scenes, 2D and 3D
   for (const auto& [name, description] : scenes) {
-    const std::string path = find_scene(name);
+    const std::string path = scene::find_scene(name);
     EXPECT_FALSE(description.empty()) << name;
-    const int dim = scene_dimension(path);
+    const int dim = scene::scene_dimension(path);
     EXPECT_EQ(name.substr(name.size() - 2), dim == 2 ? "2d" : "3d") << name;
     if (dim == 2) {
-      const Scene<2> s = load_scene<2>(path);
+      const scene::Scene<2> s = scene::load_scene<2>(path);
       EXPECT_EQ(s.name, name);
       EXPECT_TRUE(static_cast<bool>(s.liquid));
     } else {
-      const Scene<3> s = load_scene<3>(path);
+      const scene::Scene<3> s = scene::load_scene<3>(path);
       EXPECT_EQ(s.name, name);
     }
   }
 }
 
 TEST(Scene, ValuesAndOverridesReachTheSolverOptions) {
-  Scene<2> s = load_scene<2>(find_scene("drop-2d"));
+  scene::Scene<2> s = scene::load_scene<2>(scene::find_scene("drop-2d"));
   EXPECT_EQ(s.pic.finest_level, 6);
   EXPECT_EQ(s.pic.coarse_level, 3);
   EXPECT_EQ(s.pic.max_jump, 2);
@@ -54,20 +54,20 @@ TEST(Scene, ValuesAndOverridesReachTheSolverOptions) {
   EXPECT_DOUBLE_EQ(s.velocity(Vec<2>(0.5, 0.1)).norm(), 0.0);
   EXPECT_LT(s.liquid(Vec<2>(0.5, 0.7)), 0.0);
   EXPECT_GT(s.liquid(Vec<2>(0.5, 0.5)), 0.0);
-  SceneOverrides o;
+  scene::SceneOverrides o;
   o.method = "apic";
   o.finest = 5;
   o.steps = 3;
-  apply_overrides<2>(o, s);
-  EXPECT_EQ(s.pic.transfer, PicTransfer::apic);
+  scene::apply_overrides<2>(o, s);
+  EXPECT_EQ(s.pic.transfer, pic::PicTransfer::apic);
   EXPECT_FALSE(s.pic.adaptive);
   EXPECT_EQ(s.pic.finest_level, 5);
   EXPECT_EQ(s.pic.coarse_level, 2);
   EXPECT_EQ(s.time.steps, 3);
-  SceneOverrides bad;
+  scene::SceneOverrides bad;
   bad.method = "pic";
   bad.adaptive = 1;
-  EXPECT_THROW(apply_overrides<2>(bad, s), Error);
+  EXPECT_THROW(scene::apply_overrides<2>(bad, s), Error);
   EXPECT_TRUE(s.pic.rbf.share_factors);  // the defaults
   EXPECT_EQ(s.pic.rbf.condition_estimate, rbf::ConditionEstimate::probes);
   EXPECT_EQ(s.pic.poisson.nullspace, mac::Nullspace::zero_mean);
@@ -77,10 +77,10 @@ TEST(Scene, ValuesAndOverridesReachTheSolverOptions) {
   EXPECT_FALSE(s.paper_preset);
   {
     // --paper: the paper's transfer and its reseeding band, remembered by the scene.
-    Scene<2> paper = load_scene<2>(find_scene("drop-2d"));
-    SceneOverrides p;
+    scene::Scene<2> paper = scene::load_scene<2>(scene::find_scene("drop-2d"));
+    scene::SceneOverrides p;
     p.paper = true;
-    apply_overrides<2>(p, paper);
+    scene::apply_overrides<2>(p, paper);
     EXPECT_TRUE(paper.paper_preset);
     EXPECT_TRUE(paper.pic.paper_preset());
     EXPECT_EQ(paper.pic.rbf.exponent, 5);
@@ -90,7 +90,7 @@ TEST(Scene, ValuesAndOverridesReachTheSolverOptions) {
   }
   {
     // [solver] preset = "paper" does the same; a key after it overrides what the preset set.
-    std::ifstream in(find_scene("drop-2d"));
+    std::ifstream in(scene::find_scene("drop-2d"));
     std::stringstream text;
     text << in.rdbuf();
     std::string toml = text.str();
@@ -99,7 +99,7 @@ TEST(Scene, ValuesAndOverridesReachTheSolverOptions) {
     toml = at == std::string::npos ? toml + "\n[solver]" + keys + "\n" : toml.insert(at + 8, keys);
     const std::string path = ::testing::TempDir() + "/paper-preset.toml";
     std::ofstream(path) << toml;
-    const Scene<2> paper = load_scene<2>(path);
+    const scene::Scene<2> paper = scene::load_scene<2>(path);
     EXPECT_TRUE(paper.paper_preset);
     EXPECT_EQ(paper.pic.rbf.exponent, 5);
     EXPECT_EQ(paper.pic.rbf.degree, 1);
@@ -108,7 +108,7 @@ TEST(Scene, ValuesAndOverridesReachTheSolverOptions) {
   {
     // [solver] share_factors = false and condition_estimate = "hager-higham" reach the transfer's
     // options, nullspace = "pin" the PPE's, and the transfer kernel and holes-only reseeding theirs.
-    std::ifstream in(find_scene("drop-2d"));
+    std::ifstream in(scene::find_scene("drop-2d"));
     std::stringstream text;
     text << in.rdbuf();
     std::string toml = text.str();
@@ -119,7 +119,7 @@ TEST(Scene, ValuesAndOverridesReachTheSolverOptions) {
     toml = at == std::string::npos ? toml + "\n[solver]" + keys + "\n" : toml.insert(at + 8, keys);
     const std::string path = ::testing::TempDir() + "/own-factors.toml";
     std::ofstream(path) << toml;
-    const Scene<2> own = load_scene<2>(path);
+    const scene::Scene<2> own = scene::load_scene<2>(path);
     EXPECT_FALSE(own.pic.rbf.share_factors);
     EXPECT_EQ(own.pic.rbf.condition_estimate, rbf::ConditionEstimate::hager_higham);
     EXPECT_EQ(own.pic.poisson.nullspace, mac::Nullspace::pin);
@@ -129,11 +129,11 @@ TEST(Scene, ValuesAndOverridesReachTheSolverOptions) {
     EXPECT_EQ(own.pic.reseeding.hi, std::numeric_limits<int>::max());
     EXPECT_FALSE(own.pic.reseeding.keep);
   }
-  const Scene<3> obstacles = load_scene<3>(find_scene("dam-break-obstacles-3d"));
+  const scene::Scene<3> obstacles = scene::load_scene<3>(scene::find_scene("dam-break-obstacles-3d"));
   ASSERT_TRUE(static_cast<bool>(obstacles.pic.solid));
   EXPECT_LT(obstacles.pic.solid(Vec<3>(0.6, 0.9, 0.3)), 0.0);  // inside the pillar (infinite along y)
   EXPECT_GT(obstacles.pic.solid(Vec<3>(0.2, 0.5, 0.5)), 0.0);
-  const Scene<2> sources = load_scene<2>(find_scene("two-sources-2d"));
+  const scene::Scene<2> sources = scene::load_scene<2>(scene::find_scene("two-sources-2d"));
   ASSERT_EQ(sources.pic.sources.size(), 2u);
   EXPECT_DOUBLE_EQ(sources.pic.sources[1].velocity[0], -1.5);
   EXPECT_TRUE(sources.pic.sources[0].active(0.25));
@@ -149,7 +149,7 @@ TEST(Scene, OutputFieldsAndTheRegularGridsSolverAreRead) {
            "[time]\nsteps = 2\n[output]\nfields = [\"speed\", \"type\"]\n"
            "[[fluid]]\nshape = \"box\"\nlo = [0.0, 0.0]\nhi = [1.0, 0.5]\n";
   }
-  const Scene<2> s = load_scene<2>(path);
+  const scene::Scene<2> s = scene::load_scene<2>(path);
   EXPECT_TRUE(s.output.writes("speed"));
   EXPECT_TRUE(s.output.writes("type"));
   EXPECT_FALSE(s.output.writes("pressure"));
@@ -157,32 +157,32 @@ TEST(Scene, OutputFieldsAndTheRegularGridsSolverAreRead) {
   EXPECT_FALSE(s.pic.adaptive);  // apic runs on a regular grid
   // The regular grid's PPE is the symmetric FD matrix: conjugate gradients unless the file says.
   EXPECT_EQ(s.pic.solver.kind, linalg::SolverKind::cg_jacobi);
-  const Scene<2> tree = load_scene<2>(find_scene("pool-2d"));
+  const scene::Scene<2> tree = scene::load_scene<2>(scene::find_scene("pool-2d"));
   EXPECT_EQ(tree.pic.solver.kind, linalg::SolverKind::bicgstab_ilut);
 }
 
 TEST(Scene, ResumedRunEndsBitForBitLikeTheUninterruptedOne) {
   for (const char* name : {"dam-break-obstacles-2d", "two-sources-2d"}) {
-    const std::string path = find_scene(name);
-    SceneOverrides o;
+    const std::string path = scene::find_scene(name);
+    scene::SceneOverrides o;
     o.finest = 5;
     o.steps = 10;
-    RunSettings settings;
+    scene::RunSettings settings;
     settings.out = temp_folder(std::string(name) + "-a");
     settings.checkpoint_every = 5;
     settings.overrides = o;
     settings.scene_path = path;
-    Scene<2> scene = load_scene<2>(path);
-    apply_overrides<2>(o, scene);
-    SceneRunner<2> full(scene, settings);
+    scene::Scene<2> scene = scene::load_scene<2>(path);
+    scene::apply_overrides<2>(o, scene);
+    scene::SceneRunner<2> full(scene, settings);
     while (!full.done()) full.step();
     const std::string half =
         (std::filesystem::path(settings.out) / (std::string(name) + "_checkpoint_000005.h5")).string();
     ASSERT_TRUE(std::filesystem::exists(half));
 
-    RunSettings again;
+    scene::RunSettings again;
     again.out = temp_folder(std::string(name) + "-b");
-    SceneRunner<2> resumed = SceneRunner<2>::resume(half, again);
+    scene::SceneRunner<2> resumed = scene::SceneRunner<2>::resume(half, again);
     EXPECT_EQ(resumed.solver().steps(), 5);
     while (!resumed.done()) resumed.step();
     const auto& a = full.solver().particles();
@@ -201,26 +201,26 @@ TEST(Scene, ResumedRunEndsBitForBitLikeTheUninterruptedOne) {
 }
 
 TEST(Scene, CheckpointOfAnotherDimensionOrWithoutItsSceneIsRefused) {
-  const std::string path = find_scene("pool-2d");
-  RunSettings settings;
+  const std::string path = scene::find_scene("pool-2d");
+  scene::RunSettings settings;
   settings.out = temp_folder("refuse");
   settings.scene_path = path;
   settings.frames = false;
-  Scene<2> scene = load_scene<2>(path);
+  scene::Scene<2> scene = scene::load_scene<2>(path);
   scene.pic.finest_level = 4;
   scene.pic.coarse_level = 2;
-  SceneRunner<2> run(scene, settings);
+  scene::SceneRunner<2> run(scene, settings);
   run.step();
   const std::string saved = run.checkpoint();
-  EXPECT_EQ(checkpoint_dimension(saved), 2);
-  EXPECT_THROW(SceneRunner<3>::resume(saved, RunSettings{}), Error);
+  EXPECT_EQ(scene::checkpoint_dimension(saved), 2);
+  EXPECT_THROW(scene::SceneRunner<3>::resume(saved, scene::RunSettings{}), Error);
 }
 
 TEST(SphScene, KeysReachTheSolverOptions) {
-  const Scene<2> s = load_scene<2>(find_scene("sph-dam-break-2d"));
+  const scene::Scene<2> s = scene::load_scene<2>(scene::find_scene("sph-dam-break-2d"));
   ASSERT_TRUE(s.sph);
   EXPECT_FALSE(s.grid_given);
-  const sph::SphOptions<2> o = sph_options<2>(s);
+  const sph::SphOptions<2> o = scene::sph_options<2>(s);
   EXPECT_DOUBLE_EQ(o.spacing, 0.01);
   EXPECT_EQ(o.max_level, 3);
   EXPECT_TRUE(o.adaptive);
@@ -228,80 +228,80 @@ TEST(SphScene, KeysReachTheSolverOptions) {
   ASSERT_TRUE(s.sph_scene.gate);
   EXPECT_DOUBLE_EQ(s.sph_scene.gate_box.hi[1], 0.6);
   // Sound speed: 10 sqrt(2 g 0.6), the column's fall to the floor; stiffness rho_0 c^2.
-  EXPECT_NEAR(sph_sound_speed<2>(s), 10.0 * std::sqrt(2.0 * 9.81 * 0.6), 1e-9);
+  EXPECT_NEAR(scene::sph_sound_speed<2>(s), 10.0 * std::sqrt(2.0 * 9.81 * 0.6), 1e-9);
   EXPECT_NEAR(o.fluid.stiffness, 1000.0 * 100.0 * 2.0 * 9.81 * 0.6, 1e-6);
   // SPH's default step bounds: CFL 0.25 of the sound speed, no floor that would override it.
   EXPECT_DOUBLE_EQ(s.time.cfl, 0.25);
   EXPECT_LE(s.time.dt_min, 1e-9);
-  EXPECT_EQ(s.output.fields, SceneOutput::sph_fields());
+  EXPECT_EQ(s.output.fields, scene::SceneOutput::sph_fields());
 
-  const Scene<2> toy = load_scene<2>(find_scene("sph-desk-toy-2d"));
-  const sph::SphOptions<2> t = sph_options<2>(toy);
+  const scene::Scene<2> toy = scene::load_scene<2>(scene::find_scene("sph-desk-toy-2d"));
+  const sph::SphOptions<2> t = scene::sph_options<2>(toy);
   EXPECT_NEAR(t.rotation.angle, 3.141592653589793, 1e-12);
   EXPECT_DOUBLE_EQ(t.rotation.duration, 0.6);
   EXPECT_EQ(t.rotation.pivot, Vec<2>(0.3, 0.5));  // the domain's centre
   EXPECT_EQ(t.obstacles.size(), 1u);              // the solids, united
-  const Scene<2> pour = load_scene<2>(find_scene("sph-pour-2d"));
-  const sph::SphOptions<2> p = sph_options<2>(pour);
+  const scene::Scene<2> pour = scene::load_scene<2>(scene::find_scene("sph-pour-2d"));
+  const sph::SphOptions<2> p = scene::sph_options<2>(pour);
   ASSERT_EQ(p.sources.size(), 1u);
   EXPECT_DOUBLE_EQ(p.sources[0].stop, 1.0);
   EXPECT_DOUBLE_EQ(p.sources[0].bounds.lo[0], 0.05);
 }
 
 TEST(SphScene, APicSceneRunsBySphAtHalfItsFinestCell) {
-  Scene<2> s = load_scene<2>(find_scene("dam-break-2d"));
-  SceneOverrides o;
+  scene::Scene<2> s = scene::load_scene<2>(scene::find_scene("dam-break-2d"));
+  scene::SceneOverrides o;
   o.method = "sph";
   o.finest = 5;
-  apply_overrides<2>(o, s);
+  scene::apply_overrides<2>(o, s);
   ASSERT_TRUE(s.sph);
-  EXPECT_DOUBLE_EQ(sph_options<2>(s).spacing, 0.5 / 32.0);
-  EXPECT_EQ(s.output.fields, SceneOutput::sph_fields());
+  EXPECT_DOUBLE_EQ(scene::sph_options<2>(s).spacing, 0.5 / 32.0);
+  EXPECT_EQ(s.output.fields, scene::SceneOutput::sph_fields());
   EXPECT_DOUBLE_EQ(s.time.cfl, 0.25);
   // An SPH scene's given spacing is not moved by --finest, and --spacing is an SPH option only.
-  Scene<2> d = load_scene<2>(find_scene("sph-dam-break-2d"));
-  SceneOverrides finest;
+  scene::Scene<2> d = scene::load_scene<2>(scene::find_scene("sph-dam-break-2d"));
+  scene::SceneOverrides finest;
   finest.finest = 6;
-  EXPECT_THROW(apply_overrides<2>(finest, d), Error);
-  SceneOverrides spacing;
+  EXPECT_THROW(scene::apply_overrides<2>(finest, d), Error);
+  scene::SceneOverrides spacing;
   spacing.spacing = 0.02;
-  Scene<2> pic = load_scene<2>(find_scene("pool-2d"));
-  EXPECT_THROW(apply_overrides<2>(spacing, pic), Error);
-  apply_overrides<2>(spacing, d);
-  EXPECT_DOUBLE_EQ(sph_options<2>(d).spacing, 0.02);
+  scene::Scene<2> pic = scene::load_scene<2>(scene::find_scene("pool-2d"));
+  EXPECT_THROW(scene::apply_overrides<2>(spacing, pic), Error);
+  scene::apply_overrides<2>(spacing, d);
+  EXPECT_DOUBLE_EQ(scene::sph_options<2>(d).spacing, 0.02);
   // An SPH scene without [grid] cannot run a PIC method.
-  SceneOverrides rbf;
+  scene::SceneOverrides rbf;
   rbf.method = "rbf";
-  Scene<2> d2 = load_scene<2>(find_scene("sph-dam-break-2d"));
-  EXPECT_THROW(apply_overrides<2>(rbf, d2), Error);
+  scene::Scene<2> d2 = scene::load_scene<2>(scene::find_scene("sph-dam-break-2d"));
+  EXPECT_THROW(scene::apply_overrides<2>(rbf, d2), Error);
 }
 
 TEST(SphScene, ResumedRunEndsBitForBitLikeTheUninterruptedOne) {
   // The pour: sources add particles, resampling splits and merges (random directions).
-  const std::string path = find_scene("sph-pour-2d");
-  SceneOverrides o;
+  const std::string path = scene::find_scene("sph-pour-2d");
+  scene::SceneOverrides o;
   o.spacing = 0.02;
   o.steps = 40;
-  RunSettings settings;
+  scene::RunSettings settings;
   settings.out = temp_folder("sph-pour-a");
   settings.checkpoint_every = 20;
   settings.overrides = o;
   settings.scene_path = path;
-  Scene<2> scene = load_scene<2>(path);
-  apply_overrides<2>(o, scene);
-  SphSceneRunner<2> full(scene, settings);
+  scene::Scene<2> scene = scene::load_scene<2>(path);
+  scene::apply_overrides<2>(o, scene);
+  scene::SphSceneRunner<2> full(scene, settings);
   while (!full.done()) full.step();
-  const SphRunSummary fs = full.summary();
+  const scene::SphRunSummary fs = full.summary();
   EXPECT_GT(fs.emitted, 0);
   EXPECT_GT(fs.split + fs.merged, 0);
   const std::string half =
       (std::filesystem::path(settings.out) / "sph-pour-2d_checkpoint_000020.h5").string();
   ASSERT_TRUE(std::filesystem::exists(half));
-  EXPECT_TRUE(checkpoint_is_sph(half));
+  EXPECT_TRUE(scene::checkpoint_is_sph(half));
 
-  RunSettings again;
+  scene::RunSettings again;
   again.out = temp_folder("sph-pour-b");
-  SphSceneRunner<2> resumed = SphSceneRunner<2>::resume(half, again);
+  scene::SphSceneRunner<2> resumed = scene::SphSceneRunner<2>::resume(half, again);
   EXPECT_EQ(resumed.solver().steps(), 20);
   while (!resumed.done()) resumed.step();
   const auto& a = full.solver().particles();
@@ -314,7 +314,7 @@ TEST(SphScene, ResumedRunEndsBitForBitLikeTheUninterruptedOne) {
     ASSERT_EQ(a.level[i], b.level[i]) << "particle " << i;
   }
   EXPECT_EQ(full.solver().time(), resumed.solver().time());
-  const SphRunSummary rs = resumed.summary();
+  const scene::SphRunSummary rs = resumed.summary();
   EXPECT_EQ(fs.steps, rs.steps);
   EXPECT_EQ(fs.particles, rs.particles);
   EXPECT_EQ(fs.split, rs.split);
@@ -324,8 +324,10 @@ TEST(SphScene, ResumedRunEndsBitForBitLikeTheUninterruptedOne) {
   EXPECT_GT(fs.max_compression, 0.0);
   EXPECT_EQ(full.n_frames(), resumed.n_frames());
   // A PIC runner refuses the SPH checkpoint and the SPH runner a PIC scene.
-  EXPECT_THROW(SceneRunner<2>::resume(half, again), Error);
-  EXPECT_THROW(SphSceneRunner<2>(load_scene<2>(find_scene("pool-2d")), RunSettings{}), Error);
+  EXPECT_THROW(scene::SceneRunner<2>::resume(half, again), Error);
+  EXPECT_THROW(
+      scene::SphSceneRunner<2>(scene::load_scene<2>(scene::find_scene("pool-2d")), scene::RunSettings{}),
+      Error);
 }
 
 TEST(SphScene, EveryKeyRefusesABadValueByName) {
@@ -389,7 +391,7 @@ TEST(SphScene, EveryKeyRefusesABadValueByName) {
           << lines << "\n";
     }
     try {
-      load_scene<2>(path);
+      scene::load_scene<2>(path);
       ADD_FAILURE() << "accepted: " << lines;
     } catch (const Error& e) {
       EXPECT_NE(std::string(e.what()).find(expected), std::string::npos) << lines << "\n" << e.what();
@@ -404,7 +406,7 @@ TEST(SphScene, EveryKeyRefusesABadValueByName) {
            "[[fluid]]\nshape = \"box\"\nlo = [0.0, 0.0, 0.0]\nhi = [0.4, 0.6, 1.0]\n[sph]\nspacing = 0.05\n"
            "turn_angle = 90.0\nturn_axis = [0.0, 0.0, 0.0]\n";
   }
-  EXPECT_THROW(load_scene<3>(path3), Error);
+  EXPECT_THROW(scene::load_scene<3>(path3), Error);
 }
 
 }  // namespace

@@ -39,20 +39,21 @@ Vec<Dim> linear_field(const Vec<Dim>& x) {
 }
 
 template <int Dim>
-CellGraph<Dim> random_tree(std::uint64_t seed, int jump) {
-  CellGraphOptions<Dim> options;
+tree::CellGraph<Dim> random_tree(std::uint64_t seed, int jump) {
+  tree::CellGraphOptions<Dim> options;
   options.max_jump = jump;
   return tree::random<Dim>(Box<Dim>{Vec<Dim>::Constant(-1.0), Vec<Dim>::Constant(1.0)}, seed, 2,
                            Dim == 2 ? 6 : 4, 0.35, options);
 }
 
 template <int Dim>
-Particles<Dim> seeded(const CellGraph<Dim>& g, double jitter, const levelset::Function<Dim>& region = {}) {
-  Particles<Dim> p;
-  SeedOptions o;
+particles::Particles<Dim> seeded(const tree::CellGraph<Dim>& g, double jitter,
+                                 const levelset::Function<Dim>& region = {}) {
+  particles::Particles<Dim> p;
+  particles::SeedOptions o;
   o.jitter = jitter;
   const auto everywhere = [](const Vec<Dim>&) { return -1.0; };
-  seed_region<Dim>(g, region ? region : levelset::Function<Dim>(everywhere), o, p);
+  particles::seed_region<Dim>(g, region ? region : levelset::Function<Dim>(everywhere), o, p);
   return p;
 }
 
@@ -62,25 +63,25 @@ TYPED_TEST(TransferTest, RbfReproducesLinearFieldsOnNonGradedTrees) {
     const auto g = random_tree<Dim>(20 + jump, jump);
     auto p = seeded<Dim>(g, 0.6);
     for (int i = 0; i < p.size(); ++i) p.v[i] = linear_field<Dim>(p.x[i]);
-    CellBins bins;
-    bin_particles<Dim>(g, p.x, bins);
-    TransferOptions o = TransferOptions::paper_rbf();
+    particles::CellBins bins;
+    particles::bin_particles<Dim>(g, p.x, bins);
+    transfer::TransferOptions o = transfer::TransferOptions::paper_rbf();
     o.clamp = false;
-    FaceValues faces;
-    const TransferReport r = particles_to_faces<Dim>(g, p, bins, o, faces);
+    transfer::FaceValues faces;
+    const transfer::TransferReport r = transfer::particles_to_faces<Dim>(g, p, bins, o, faces);
     EXPECT_EQ(r.empty, 0);
     EXPECT_EQ(r.fallback, 0);
     double worst = 0.0;
-    g.for_each_face([&](FaceId f) {
+    g.for_each_face([&](tree::FaceId f) {
       ASSERT_TRUE(faces.known[f]);
       worst = std::max(worst, std::abs(faces.value[f] - linear_field<Dim>(g.face_centre(f))[g.face(f).axis]));
     });
     EXPECT_LT(worst, 1e-10) << "particle -> face, jump " << jump;
 
     std::vector<double> u(g.face_capacity(), 0.0);
-    g.for_each_face([&](FaceId f) { u[f] = linear_field<Dim>(g.face_centre(f))[g.face(f).axis]; });
+    g.for_each_face([&](tree::FaceId f) { u[f] = linear_field<Dim>(g.face_centre(f))[g.face(f).axis]; });
     std::vector<Vec<Dim>> v(p.size());
-    const TransferReport back = faces_to_points<Dim>(g, u, {}, p.x, bins, o, v);
+    const transfer::TransferReport back = transfer::faces_to_points<Dim>(g, u, {}, p.x, bins, o, v);
     EXPECT_EQ(back.empty, 0);
     double worst_back = 0.0;
     for (int i = 0; i < p.size(); ++i)
@@ -119,9 +120,10 @@ TYPED_TEST(TransferTest, MlsWeightsReproduceTheirDegreeAndLowerItWhenShort) {
 /// n particles carrying APIC's field "apic" (C = 0) at random positions at least 1.5 cells from
 /// the walls of the unit box (whole stencils), with random velocities in [-1, 1]^Dim.
 template <int Dim>
-Particles<Dim> interior_apic_particles(const RegularLattice<Dim>& lattice, int n, std::mt19937_64& rng) {
+particles::Particles<Dim> interior_apic_particles(const transfer::RegularLattice<Dim>& lattice, int n,
+                                                  std::mt19937_64& rng) {
   const double h = lattice.h()[0];
-  Particles<Dim> p;
+  particles::Particles<Dim> p;
   p.add_field("apic", Dim * Dim);
   std::uniform_real_distribution<double> pos(1.5 * h, 1.0 - 1.5 * h), vel(-1.0, 1.0);
   for (int i = 0; i < n; ++i) {
@@ -135,42 +137,45 @@ Particles<Dim> interior_apic_particles(const RegularLattice<Dim>& lattice, int n
 TYPED_TEST(TransferTest, ApicConservesLinearAndAngularMomentum) {
   constexpr int Dim = TypeParam::value;
   const auto g = tree::uniform<Dim>(Box<Dim>{}, Dim == 2 ? 5 : 3);
-  const RegularLattice<Dim> lattice(g);
+  const transfer::RegularLattice<Dim> lattice(g);
   std::mt19937_64 rng(8);
   std::uniform_real_distribution<double> vel(-1.0, 1.0);
-  Particles<Dim> p = interior_apic_particles<Dim>(lattice, 2000, rng);
+  particles::Particles<Dim> p = interior_apic_particles<Dim>(lattice, 2000, rng);
   const int apic = p.field_index("apic");
   for (double& c : p.field(apic)) c = 3.0 * vel(rng);
-  CellBins bins;
-  bin_particles<Dim>(g, p.x, bins);
+  particles::CellBins bins;
+  particles::bin_particles<Dim>(g, p.x, bins);
   std::vector<double> masses(p.size());
   for (double& m : masses) m = 0.5 + 0.5 * std::abs(vel(rng));
 
-  const Vec<Dim> p0 = particle_momentum<Dim>(p, masses);
-  const Eigen::Vector3d l0 = particle_angular_momentum<Dim>(lattice, p, p.field(apic), masses);
-  FaceValues faces;
-  linear_to_faces<Dim>(g, lattice, p, bins, RegularScheme::apic, masses, faces);
-  const Vec<Dim> p1 = face_momentum<Dim>(g, faces);
-  const Eigen::Vector3d l1 = face_angular_momentum<Dim>(g, faces);
+  const Vec<Dim> p0 = transfer::particle_momentum<Dim>(p, masses);
+  const Eigen::Vector3d l0 = transfer::particle_angular_momentum<Dim>(lattice, p, p.field(apic), masses);
+  transfer::FaceValues faces;
+  transfer::linear_to_faces<Dim>(g, lattice, p, bins, transfer::RegularScheme::apic, masses, faces);
+  const Vec<Dim> p1 = transfer::face_momentum<Dim>(g, faces);
+  const Eigen::Vector3d l1 = transfer::face_angular_momentum<Dim>(g, faces);
   EXPECT_LT((p1 - p0).norm(), 1e-11 * p0.norm() + 1e-11);
   EXPECT_LT((l1 - l0).norm(), 1e-11 * l0.norm() + 1e-11);
 
-  linear_to_points<Dim>(lattice, faces.value, p.x, p.v, p.field(apic));
-  const Vec<Dim> p2 = particle_momentum<Dim>(p, masses);
-  const Eigen::Vector3d l2 = particle_angular_momentum<Dim>(lattice, p, p.field(apic), masses);
+  transfer::linear_to_points<Dim>(lattice, faces.value, p.x, p.v, p.field(apic));
+  const Vec<Dim> p2 = transfer::particle_momentum<Dim>(p, masses);
+  const Eigen::Vector3d l2 = transfer::particle_angular_momentum<Dim>(lattice, p, p.field(apic), masses);
   EXPECT_LT((p2 - p0).norm(), 1e-11 * p0.norm() + 1e-11);
   EXPECT_LT((l2 - l0).norm(), 1e-11 * l0.norm() + 1e-11);
 
   // PIC (no affine part) keeps linear momentum but not angular momentum.
-  Particles<Dim> q = p;
+  particles::Particles<Dim> q = p;
   for (double& c : q.field(apic)) c = 0.0;
-  const Eigen::Vector3d lq0 = particle_angular_momentum<Dim>(lattice, q, {}, masses);
-  linear_to_faces<Dim>(g, lattice, q, bins, RegularScheme::pic, masses, faces);
-  linear_to_points<Dim>(lattice, faces.value, q.x, q.v);
-  EXPECT_LT((particle_momentum<Dim>(q, masses) - particle_momentum<Dim>(p, masses)).norm(), 1e-9);
-  EXPECT_GT((particle_angular_momentum<Dim>(lattice, q, {}, masses) - lq0).norm(), 1e-6 * lq0.norm());
+  const Eigen::Vector3d lq0 = transfer::particle_angular_momentum<Dim>(lattice, q, {}, masses);
+  transfer::linear_to_faces<Dim>(g, lattice, q, bins, transfer::RegularScheme::pic, masses, faces);
+  transfer::linear_to_points<Dim>(lattice, faces.value, q.x, q.v);
+  EXPECT_LT(
+      (transfer::particle_momentum<Dim>(q, masses) - transfer::particle_momentum<Dim>(p, masses)).norm(),
+      1e-9);
+  EXPECT_GT((transfer::particle_angular_momentum<Dim>(lattice, q, {}, masses) - lq0).norm(),
+            1e-6 * lq0.norm());
 
-  EXPECT_THROW(RegularLattice<Dim>(random_tree<Dim>(1, 2)), Error);
+  EXPECT_THROW(transfer::RegularLattice<Dim>(random_tree<Dim>(1, 2)), Error);
 }
 
 // Face -> particle with APIC fits v + C (x_f - x_p) to the stencil's faces by weighted least
@@ -179,16 +184,16 @@ TYPED_TEST(TransferTest, ApicConservesLinearAndAngularMomentum) {
 TYPED_TEST(TransferTest, ApicAffineEnergyIsWhatTheFitKeepsOfTheFaces) {
   constexpr int Dim = TypeParam::value;
   const auto g = tree::uniform<Dim>(Box<Dim>{}, Dim == 2 ? 5 : 3);
-  const RegularLattice<Dim> lattice(g);
+  const transfer::RegularLattice<Dim> lattice(g);
   std::mt19937_64 rng(5);
   std::uniform_real_distribution<double> vel(-1.0, 1.0);
-  Particles<Dim> p = interior_apic_particles<Dim>(lattice, 500, rng);
+  particles::Particles<Dim> p = interior_apic_particles<Dim>(lattice, 500, rng);
   const int apic = p.field_index("apic");
   const auto face_energy = [&](std::span<const double> u) {
     double e = 0.0;
     for (const Vec<Dim>& x : p.x)
       for (int k = 0; k < Dim; ++k) {
-        const LinearStencil<Dim> st(lattice, k, x);
+        const transfer::LinearStencil<Dim> st(lattice, k, x);
         for (int corner = 0; corner < (1 << Dim); ++corner) {
           IVec<Dim> a = st.base;
           for (int j = 0; j < Dim; ++j) a[j] += (corner >> j) & 1;
@@ -198,21 +203,21 @@ TYPED_TEST(TransferTest, ApicAffineEnergyIsWhatTheFitKeepsOfTheFaces) {
     return e;
   };
   const auto particle_energy = [&] {
-    double e = particle_affine_energy<Dim>(lattice, p, p.field(apic));
+    double e = transfer::particle_affine_energy<Dim>(lattice, p, p.field(apic));
     for (const Vec<Dim>& v : p.v) e += 0.5 * v.squaredNorm();
     return e;
   };
   std::vector<double> u(g.face_capacity(), 0.0);
   // A linear field: the fit is exact, nothing is lost.
-  g.for_each_face([&](FaceId f) { u[f] = linear_field<Dim>(g.face_centre(f))[g.face(f).axis]; });
-  linear_to_points<Dim>(lattice, u, p.x, p.v, p.field(apic));
-  const double affine = particle_affine_energy<Dim>(lattice, p, p.field(apic));
+  g.for_each_face([&](tree::FaceId f) { u[f] = linear_field<Dim>(g.face_centre(f))[g.face(f).axis]; });
+  transfer::linear_to_points<Dim>(lattice, u, p.x, p.v, p.field(apic));
+  const double affine = transfer::particle_affine_energy<Dim>(lattice, p, p.field(apic));
   // The affine part is a few 1e-4 of the whole here (2D) and the check below holds to 1e-12 of it.
   EXPECT_GT(affine, 1e-5 * particle_energy());
   EXPECT_NEAR(particle_energy(), face_energy(u), 1e-12 * face_energy(u));
   // Random faces: the fit keeps less than the faces hold.
   for (double& x : u) x = vel(rng);
-  linear_to_points<Dim>(lattice, u, p.x, p.v, p.field(apic));
+  transfer::linear_to_points<Dim>(lattice, u, p.x, p.v, p.field(apic));
   EXPECT_LT(particle_energy(), face_energy(u));
 }
 
@@ -222,13 +227,14 @@ TYPED_TEST(TransferTest, EmptyFacesAreReportedExtrapolatedAndNeverNaN) {
   const auto blob = levelset::sphere<Dim>(Vec<Dim>::Constant(-0.3), 0.45);
   auto p = seeded<Dim>(g, 0.3, blob);
   for (int i = 0; i < p.size(); ++i) p.v[i] = linear_field<Dim>(p.x[i]);
-  CellBins bins;
-  bin_particles<Dim>(g, p.x, bins);
-  for (const TransferOptions& o : {TransferOptions::paper_rbf(), TransferOptions::cubic_mls()}) {
-    FaceValues faces;
-    const TransferReport r = particles_to_faces<Dim>(g, p, bins, o, faces);
+  particles::CellBins bins;
+  particles::bin_particles<Dim>(g, p.x, bins);
+  for (const transfer::TransferOptions& o :
+       {transfer::TransferOptions::paper_rbf(), transfer::TransferOptions::cubic_mls()}) {
+    transfer::FaceValues faces;
+    const transfer::TransferReport r = transfer::particles_to_faces<Dim>(g, p, bins, o, faces);
     long unknown = 0;
-    g.for_each_face([&](FaceId f) {
+    g.for_each_face([&](tree::FaceId f) {
       ASSERT_TRUE(std::isfinite(faces.value[f]));
       unknown += !faces.known[f];
     });
@@ -236,25 +242,27 @@ TYPED_TEST(TransferTest, EmptyFacesAreReportedExtrapolatedAndNeverNaN) {
     EXPECT_EQ(r.empty, unknown);
     // Points in cells with no known face nearby are left at zero and counted.
     std::vector<Vec<Dim>> far{Vec<Dim>::Constant(0.97)};
-    CellBins far_bins;
-    bin_particles<Dim>(g, far, far_bins);
+    particles::CellBins far_bins;
+    particles::bin_particles<Dim>(g, far, far_bins);
     std::vector<Vec<Dim>> v(1, Vec<Dim>::Constant(5.0));
-    const TransferReport back = faces_to_points<Dim>(g, faces.value, faces.known, far, far_bins, o, v);
+    const transfer::TransferReport back =
+        transfer::faces_to_points<Dim>(g, faces.value, faces.known, far, far_bins, o, v);
     EXPECT_EQ(back.empty, Dim);
     EXPECT_EQ(v[0], Vec<Dim>::Zero());
     double lo = 1e300, hi = -1e300;
-    g.for_each_face([&](FaceId f) {
+    g.for_each_face([&](tree::FaceId f) {
       if (faces.known[f]) lo = std::min(lo, faces.value[f]), hi = std::max(hi, faces.value[f]);
     });
     // One layer fills the faces next to the blob; enough layers fill the whole (connected) graph.
-    const ExtrapolationReport e1 = extrapolate_faces<Dim>(g, 1, faces.value, faces.known);
+    const transfer::ExtrapolationReport e1 = transfer::extrapolate_faces<Dim>(g, 1, faces.value, faces.known);
     ASSERT_EQ(e1.filled.size(), 1u);
     EXPECT_GT(e1.filled[0], 0);
     EXPECT_GT(e1.left_unknown, 0);
     EXPECT_EQ(e1.filled[0] + e1.left_unknown, unknown);
-    const ExtrapolationReport all = extrapolate_faces<Dim>(g, 1000, faces.value, faces.known);
+    const transfer::ExtrapolationReport all =
+        transfer::extrapolate_faces<Dim>(g, 1000, faces.value, faces.known);
     EXPECT_EQ(all.left_unknown, 0);
-    g.for_each_face([&](FaceId f) {
+    g.for_each_face([&](tree::FaceId f) {
       ASSERT_TRUE(std::isfinite(faces.value[f]));
       // Means of known neighbours: a maximum principle.
       EXPECT_GE(faces.value[f], lo);
@@ -269,35 +277,37 @@ TYPED_TEST(TransferTest, ClampingKeepsValuesInTheRangeOfTheirSources) {
   auto p = seeded<Dim>(g, 0.6);
   // A jump: RBF and MLS overshoot next to it.
   for (int i = 0; i < p.size(); ++i) p.v[i] = Vec<Dim>::Constant(p.x[i][0] + p.x[i][1] > 0.05 ? 1.0 : 0.0);
-  CellBins bins;
-  bin_particles<Dim>(g, p.x, bins);
-  for (TransferOptions o : {TransferOptions::paper_rbf(), TransferOptions::cubic_mls()}) {
+  particles::CellBins bins;
+  particles::bin_particles<Dim>(g, p.x, bins);
+  for (transfer::TransferOptions o :
+       {transfer::TransferOptions::paper_rbf(), transfer::TransferOptions::cubic_mls()}) {
     // Particle -> face (clamp_faces, off by default).
-    FaceValues faces;
-    particles_to_faces<Dim>(g, p, bins, o, faces);
+    transfer::FaceValues faces;
+    transfer::particles_to_faces<Dim>(g, p, bins, o, faces);
     double lo = 0.0, hi = 1.0;
-    g.for_each_face([&](FaceId f) { lo = std::min(lo, faces.value[f]), hi = std::max(hi, faces.value[f]); });
+    g.for_each_face(
+        [&](tree::FaceId f) { lo = std::min(lo, faces.value[f]), hi = std::max(hi, faces.value[f]); });
     EXPECT_GT(std::max(-lo, hi - 1.0), 1e-3) << o.describe() << ": range " << lo << " .. " << hi;
     o.clamp_faces = true;
-    const TransferReport r = particles_to_faces<Dim>(g, p, bins, o, faces);
+    const transfer::TransferReport r = transfer::particles_to_faces<Dim>(g, p, bins, o, faces);
     EXPECT_GT(r.clamped, 0);
-    g.for_each_face([&](FaceId f) {
+    g.for_each_face([&](tree::FaceId f) {
       EXPECT_GE(faces.value[f], 0.0);
       EXPECT_LE(faces.value[f], 1.0);
     });
     // Face -> particle (clamp, on by default) from the step sampled on the faces.
-    g.for_each_face([&](FaceId f) {
+    g.for_each_face([&](tree::FaceId f) {
       const Vec<Dim> x = g.face_centre(f);
       faces.value[f] = x[0] + x[1] > 0.05 ? 1.0 : 0.0;
     });
     std::vector<Vec<Dim>> v(p.size());
     o.clamp = false;
-    faces_to_points<Dim>(g, faces.value, {}, p.x, bins, o, v);
+    transfer::faces_to_points<Dim>(g, faces.value, {}, p.x, bins, o, v);
     double vlo = 0.0, vhi = 1.0;
     for (const auto& x : v) vlo = std::min(vlo, x.minCoeff()), vhi = std::max(vhi, x.maxCoeff());
     EXPECT_GT(std::max(-vlo, vhi - 1.0), 1e-3) << o.describe();
     o.clamp = true;
-    const TransferReport back = faces_to_points<Dim>(g, faces.value, {}, p.x, bins, o, v);
+    const transfer::TransferReport back = transfer::faces_to_points<Dim>(g, faces.value, {}, p.x, bins, o, v);
     EXPECT_GT(back.clamped, 0);
     for (const auto& x : v) {
       EXPECT_GE(x.minCoeff(), 0.0);
@@ -311,16 +321,16 @@ TYPED_TEST(TransferTest, SameBitsOnOneAndSeveralThreads) {
   const auto g = random_tree<Dim>(51, 2);
   auto p = seeded<Dim>(g, 0.5);
   for (int i = 0; i < p.size(); ++i) p.v[i] = Vec<Dim>::Constant(std::sin(3 * p.x[i][0]) * p.x[i][1]);
-  CellBins bins;
-  bin_particles<Dim>(g, p.x, bins);
+  particles::CellBins bins;
+  particles::bin_particles<Dim>(g, p.x, bins);
   const auto uniform =
       tree::uniform<Dim>(Box<Dim>{Vec<Dim>::Constant(-1.0), Vec<Dim>::Constant(1.0)}, Dim == 2 ? 5 : 3);
-  const RegularLattice<Dim> lattice(uniform);
+  const transfer::RegularLattice<Dim> lattice(uniform);
   auto q = seeded<Dim>(uniform, 0.5);
   const int apic = q.add_field("apic", Dim * Dim);
   for (int i = 0; i < q.size(); ++i) q.v[i] = Vec<Dim>::Constant(std::cos(2 * q.x[i][1]));
-  CellBins qbins;
-  bin_particles<Dim>(uniform, q.x, qbins);
+  particles::CellBins qbins;
+  particles::bin_particles<Dim>(uniform, q.x, qbins);
 
   struct Outcome {
     std::vector<double> rbf, mls, apic;
@@ -329,20 +339,22 @@ TYPED_TEST(TransferTest, SameBitsOnOneAndSeveralThreads) {
   };
   const auto run = [&] {
     Outcome o;
-    FaceValues f;
-    particles_to_faces<Dim>(g, p, bins, TransferOptions::paper_rbf(), f);
+    transfer::FaceValues f;
+    transfer::particles_to_faces<Dim>(g, p, bins, transfer::TransferOptions::paper_rbf(), f);
     o.rbf = f.value;
     o.v_rbf.resize(p.size());
-    faces_to_points<Dim>(g, f.value, f.known, p.x, bins, TransferOptions::paper_rbf(), o.v_rbf);
-    particles_to_faces<Dim>(g, p, bins, TransferOptions::cubic_mls(), f);
+    transfer::faces_to_points<Dim>(g, f.value, f.known, p.x, bins, transfer::TransferOptions::paper_rbf(),
+                                   o.v_rbf);
+    transfer::particles_to_faces<Dim>(g, p, bins, transfer::TransferOptions::cubic_mls(), f);
     o.mls = f.value;
     o.v_mls.resize(p.size());
-    faces_to_points<Dim>(g, f.value, f.known, p.x, bins, TransferOptions::cubic_mls(), o.v_mls);
-    linear_to_faces<Dim>(uniform, lattice, q, qbins, RegularScheme::apic, {}, f);
+    transfer::faces_to_points<Dim>(g, f.value, f.known, p.x, bins, transfer::TransferOptions::cubic_mls(),
+                                   o.v_mls);
+    transfer::linear_to_faces<Dim>(uniform, lattice, q, qbins, transfer::RegularScheme::apic, {}, f);
     o.apic = f.value;
     o.v_apic.resize(q.size());
     o.c_apic.resize(q.field(apic).size());
-    linear_to_points<Dim>(lattice, f.value, q.x, o.v_apic, o.c_apic);
+    transfer::linear_to_points<Dim>(lattice, f.value, q.x, o.v_apic, o.c_apic);
     return o;
   };
   const int threads = omp_get_max_threads();
@@ -366,23 +378,23 @@ TYPED_TEST(TransferTest, SharedFactorsAgreeWithEachCellsOwn) {
   constexpr int Dim = TypeParam::value;
   const auto g = random_tree<Dim>(33, 2);
   const auto p = seeded<Dim>(g, 0.5);
-  CellBins bins;
-  bin_particles<Dim>(g, p.x, bins);
+  particles::CellBins bins;
+  particles::bin_particles<Dim>(g, p.x, bins);
   std::vector<double> u(g.face_capacity(), 0.0);
   std::vector<std::uint8_t> known(g.face_capacity(), 0);
-  g.for_each_face([&](FaceId f) {
+  g.for_each_face([&](tree::FaceId f) {
     const Vec<Dim> x = g.face_centre(f);
     u[f] = std::sin(3.0 * x[0] + x[Dim - 1]) * std::cos(2.0 * x[1]);
     known[f] = x[0] + 0.5 * x[1] < 0.6;  // a band of unknown faces makes more layouts
   });
-  TransferOptions shared = TransferOptions::paper_rbf(), own = shared;
+  transfer::TransferOptions shared = transfer::TransferOptions::paper_rbf(), own = shared;
   own.share_factors = false;
   std::vector<Vec<Dim>> a(p.size()), b(p.size());
-  const TransferReport ra = faces_to_points<Dim>(g, u, known, p.x, bins, shared, a);
-  const TransferReport rb = faces_to_points<Dim>(g, u, known, p.x, bins, own, b);
+  const transfer::TransferReport ra = transfer::faces_to_points<Dim>(g, u, known, p.x, bins, shared, a);
+  const transfer::TransferReport rb = transfer::faces_to_points<Dim>(g, u, known, p.x, bins, own, b);
   EXPECT_EQ(ra.fallback, rb.fallback);
   EXPECT_EQ(ra.degree_reduced, rb.degree_reduced);
-  const FaceVelocityField<Dim> fa(g, u, known, shared), fb(g, u, known, own);
+  const transfer::FaceVelocityField<Dim> fa(g, u, known, shared), fb(g, u, known, own);
   double worst = 0.0, worst_field = 0.0, largest = 0.0;
   for (int i = 0; i < p.size(); ++i) {
     worst = std::max(worst, (a[i] - b[i]).cwiseAbs().maxCoeff());
@@ -406,16 +418,16 @@ TYPED_TEST(TransferTest, AdvectionThroughFaceVelocitiesIsExactForLinearFields) {
   const Box<Dim> domain{Vec<Dim>::Constant(-1.0), Vec<Dim>::Constant(1.0)};
   const auto g = random_tree<Dim>(61, 2);
   const auto uniform = tree::uniform<Dim>(domain, Dim == 2 ? 4 : 3);
-  const RegularLattice<Dim> lattice(uniform);
-  const auto sample = [&](const CellGraph<Dim>& graph) {
+  const transfer::RegularLattice<Dim> lattice(uniform);
+  const auto sample = [&](const tree::CellGraph<Dim>& graph) {
     std::vector<double> u(graph.face_capacity(), 0.0);
-    graph.for_each_face([&](FaceId f) { u[f] = rotation(graph.face_centre(f))[graph.face(f).axis]; });
+    graph.for_each_face([&](tree::FaceId f) { u[f] = rotation(graph.face_centre(f))[graph.face(f).axis]; });
     return u;
   };
-  TransferOptions o = TransferOptions::paper_rbf();
+  transfer::TransferOptions o = transfer::TransferOptions::paper_rbf();
   o.clamp = false;
-  const FaceVelocityField<Dim> rbf_field(g, sample(g), {}, o);
-  const FaceVelocityField<Dim> linear_field(uniform, lattice, sample(uniform));
+  const transfer::FaceVelocityField<Dim> rbf_field(g, sample(g), {}, o);
+  const transfer::FaceVelocityField<Dim> linear_field(uniform, lattice, sample(uniform));
   std::vector<Vec<Dim>> a(50), b, c;
   std::mt19937_64 rng(3);
   std::uniform_real_distribution<double> u(-0.5, 0.5);
@@ -423,17 +435,17 @@ TYPED_TEST(TransferTest, AdvectionThroughFaceVelocitiesIsExactForLinearFields) {
     for (int k = 0; k < Dim; ++k) x[k] = u(rng);
   b = a, c = a;
   for (int step = 0; step < 20; ++step) {
-    advect<Dim>(a, 0.05, Integrator::rk3, rotation, domain);
-    advect<Dim>(b, 0.05, Integrator::rk3, rbf_field, domain);
-    advect<Dim>(c, 0.05, Integrator::rk3, linear_field, domain);
+    particles::advect<Dim>(a, 0.05, particles::Integrator::rk3, rotation, domain);
+    particles::advect<Dim>(b, 0.05, particles::Integrator::rk3, rbf_field, domain);
+    particles::advect<Dim>(c, 0.05, particles::Integrator::rk3, linear_field, domain);
   }
   for (std::size_t i = 0; i < a.size(); ++i) {
     EXPECT_LT((a[i] - b[i]).norm(), 1e-9);
     EXPECT_LT((a[i] - c[i]).norm(), 1e-12);
   }
   // Cells not prepared up front are factorised on the fly, with the same result.
-  const std::vector<CellId> one{g.locate(Vec<Dim>::Zero())};
-  const FaceVelocityField<Dim> partial(g, sample(g), {}, o, one);
+  const std::vector<tree::CellId> one{g.locate(Vec<Dim>::Zero())};
+  const transfer::FaceVelocityField<Dim> partial(g, sample(g), {}, o, one);
   const Vec<Dim> x = Vec<Dim>::Constant(0.61);
   EXPECT_LT((partial(x) - rbf_field(x)).norm(), 1e-14);
   EXPECT_THROW(rbf_field(Vec<Dim>::Constant(std::nan(""))), Error);
@@ -441,27 +453,27 @@ TYPED_TEST(TransferTest, AdvectionThroughFaceVelocitiesIsExactForLinearFields) {
 
 TYPED_TEST(TransferTest, NodeLimitKeepsTheNearestParticlesAndStaysExactForLinearFields) {
   constexpr int Dim = TypeParam::value;
-  TransferOptions o = TransferOptions::paper_rbf();
+  transfer::TransferOptions o = transfer::TransferOptions::paper_rbf();
   EXPECT_EQ(o.node_cap(Dim), 4 * (Dim == 2 ? 6 : 10));  // 4 x the degree-2 terms
   o.max_nodes = -1;
   EXPECT_EQ(o.node_cap(Dim), 0);
   // 30 particles per cell: every face's two cells hold more than any limit below.
   const auto g = random_tree<Dim>(71, 2);
-  Particles<Dim> p;
-  SeedOptions so;
+  particles::Particles<Dim> p;
+  particles::SeedOptions so;
   so.per_cell = 30;
   so.jitter = 0.5;
-  seed_region<Dim>(
+  particles::seed_region<Dim>(
       g, [](const Vec<Dim>&) { return -1.0; }, so, p);
   for (int i = 0; i < p.size(); ++i) p.v[i] = linear_field<Dim>(p.x[i]);
-  CellBins bins;
-  bin_particles<Dim>(g, p.x, bins);
+  particles::CellBins bins;
+  particles::bin_particles<Dim>(g, p.x, bins);
   for (int cap : {12, 0, -1}) {
     o.max_nodes = cap;
-    FaceValues faces;
-    particles_to_faces<Dim>(g, p, bins, o, faces);
+    transfer::FaceValues faces;
+    transfer::particles_to_faces<Dim>(g, p, bins, o, faces);
     double worst = 0.0;
-    g.for_each_face([&](FaceId f) {
+    g.for_each_face([&](tree::FaceId f) {
       worst = std::max(worst, std::abs(faces.value[f] - linear_field<Dim>(g.face_centre(f))[g.face(f).axis]));
     });
     EXPECT_LT(worst, 1e-9) << "max_nodes " << cap;
@@ -472,25 +484,25 @@ TEST(Transfer, FlipKeepsWhatTheGridDidNotChangeAndPicForgetsIt) {
   // Particles with sub-grid detail on a grid whose velocity changes by a constant: FLIP (alpha 1)
   // adds the change to each particle's own velocity; PIC (alpha 0) replaces it by the grid's.
   const auto g = tree::uniform<2>(Box<2>{}, 4);
-  const RegularLattice<2> lattice(g);
+  const transfer::RegularLattice<2> lattice(g);
   auto p = seeded<2>(g, 0.5);
   for (int i = 0; i < p.size(); ++i) p.v[i] = Vec<2>(std::sin(40.0 * p.x[i][0]), std::cos(37.0 * p.x[i][1]));
-  CellBins bins;
-  bin_particles<2>(g, p.x, bins);
-  FaceValues old_faces;
-  linear_to_faces<2>(g, lattice, p, bins, RegularScheme::pic, {}, old_faces);
+  particles::CellBins bins;
+  particles::bin_particles<2>(g, p.x, bins);
+  transfer::FaceValues old_faces;
+  transfer::linear_to_faces<2>(g, lattice, p, bins, transfer::RegularScheme::pic, {}, old_faces);
   std::vector<double> new_u = old_faces.value, delta_u(new_u.size(), 0.0);
-  g.for_each_face([&](FaceId f) {
+  g.for_each_face([&](tree::FaceId f) {
     delta_u[f] = g.face(f).axis == 0 ? 0.25 : -0.5;
     new_u[f] += delta_u[f];
   });
   std::vector<Vec<2>> pic(p.size()), delta(p.size());
-  linear_to_points<2>(lattice, new_u, p.x, pic);
-  linear_to_points<2>(lattice, delta_u, p.x, delta);
+  transfer::linear_to_points<2>(lattice, new_u, p.x, pic);
+  transfer::linear_to_points<2>(lattice, delta_u, p.x, delta);
   std::vector<Vec<2>> flip = p.v, blend = p.v, pure_pic = p.v;
-  flip_blend<2>(pic, delta, 1.0, flip);
-  flip_blend<2>(pic, delta, 0.95, blend);
-  flip_blend<2>(pic, delta, 0.0, pure_pic);
+  transfer::flip_blend<2>(pic, delta, 1.0, flip);
+  transfer::flip_blend<2>(pic, delta, 0.95, blend);
+  transfer::flip_blend<2>(pic, delta, 0.0, pure_pic);
   for (int i = 0; i < p.size(); ++i) {
     EXPECT_LT((flip[i] - (p.v[i] + Vec<2>(0.25, -0.5))).norm(), 1e-12);
     EXPECT_EQ(pure_pic[i], pic[i]);
@@ -500,27 +512,27 @@ TEST(Transfer, FlipKeepsWhatTheGridDidNotChangeAndPicForgetsIt) {
 
 TEST(Transfer, BadOptionsAndSizesAreRefused) {
   const auto g = tree::uniform<2>(Box<2>{}, 3);
-  Particles<2> p;
+  particles::Particles<2> p;
   p.push_back(Vec<2>(0.5, 0.5), Vec<2>(1, 1));
-  CellBins bins;
-  bin_particles<2>(g, p.x, bins);
-  FaceValues f;
-  TransferOptions o;
+  particles::CellBins bins;
+  particles::bin_particles<2>(g, p.x, bins);
+  transfer::FaceValues f;
+  transfer::TransferOptions o;
   o.degree = 7;
-  EXPECT_THROW(particles_to_faces<2>(g, p, bins, o, f), Error);
+  EXPECT_THROW(transfer::particles_to_faces<2>(g, p, bins, o, f), Error);
   o = {};
   o.exponent = 4;
-  EXPECT_THROW(particles_to_faces<2>(g, p, bins, o, f), Error);
+  EXPECT_THROW(transfer::particles_to_faces<2>(g, p, bins, o, f), Error);
   o = {};
   o.wall_rings = 3;
-  EXPECT_THROW(particles_to_faces<2>(g, p, bins, o, f), Error);
+  EXPECT_THROW(transfer::particles_to_faces<2>(g, p, bins, o, f), Error);
   o = {};
   o.rings = 0;
-  EXPECT_THROW(particles_to_faces<2>(g, p, bins, o, f), Error);
+  EXPECT_THROW(transfer::particles_to_faces<2>(g, p, bins, o, f), Error);
   std::vector<double> u(3, 0.0);
   std::vector<Vec<2>> v(1);
-  EXPECT_THROW(faces_to_points<2>(g, u, {}, p.x, bins, TransferOptions{}, v), Error);
-  EXPECT_THROW(flip_blend<2>(v, v, 1.5, v), Error);
+  EXPECT_THROW(transfer::faces_to_points<2>(g, u, {}, p.x, bins, transfer::TransferOptions{}, v), Error);
+  EXPECT_THROW(transfer::flip_blend<2>(v, v, 1.5, v), Error);
 }
 
 }  // namespace

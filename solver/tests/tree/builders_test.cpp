@@ -22,7 +22,7 @@ levelset::Function<Dim> sphere(const Vec<Dim>& centre, double radius) {
 
 /// True when phi changes sign over the corners of c's box (so the zero set crosses the cell).
 template <int Dim>
-bool crosses(const CellGraph<Dim>& g, CellId c, const levelset::Function<Dim>& phi) {
+bool crosses(const tree::CellGraph<Dim>& g, tree::CellId c, const levelset::Function<Dim>& phi) {
   const Box<Dim> b = g.box(c);
   bool neg = false, pos = false;
   for (int k = 0; k < (1 << Dim); ++k) {
@@ -34,9 +34,9 @@ bool crosses(const CellGraph<Dim>& g, CellId c, const levelset::Function<Dim>& p
 }
 
 template <int Dim>
-std::set<std::uint64_t> leaf_set(const CellGraph<Dim>& g) {
+std::set<std::uint64_t> leaf_set(const tree::CellGraph<Dim>& g) {
   std::set<std::uint64_t> out;
-  g.for_each_cell([&](CellId c) { out.insert(g.key(c)); });
+  g.for_each_cell([&](tree::CellId c) { out.insert(g.key(c)); });
   return out;
 }
 
@@ -62,8 +62,8 @@ TYPED_TEST(BuildersTest, UniformCounts) {
   std::vector<double> areas;
   g.face_geometry(centres, areas);
   double boundary = 0.0, inner0 = 0.0;
-  g.for_each_face([&](FaceId f) {
-    const GraphFace& face = g.face(f);
+  g.for_each_face([&](tree::FaceId f) {
+    const tree::GraphFace& face = g.face(f);
     if (face.is_boundary()) {
       boundary += areas[f];
       EXPECT_TRUE(centres[f][face.axis] == 0.0 || centres[f][face.axis] == 1.0);
@@ -82,9 +82,9 @@ TYPED_TEST(BuildersTest, BandedRefinesAroundTheZeroSet) {
   for (int row = 0; row < 2; ++row) {
     const int level = (Dim == 2 ? 3 : 2) + row;
     const auto g = tree::banded<Dim>(Box<Dim>{}, phi, level, 2.0);
-    const InvariantReport r = g.check_invariants();
+    const tree::InvariantReport r = g.check_invariants();
     ASSERT_TRUE(r.ok()) << r.text();
-    g.for_each_cell([&](CellId c) {
+    g.for_each_cell([&](tree::CellId c) {
       EXPECT_GE(g.level(c), level);
       EXPECT_LE(g.level(c), level + 2);
       if (crosses(g, c, phi)) {
@@ -108,21 +108,21 @@ TYPED_TEST(BuildersTest, NarrowBandUnderEachJump) {
   constexpr int Dim = TypeParam::value;
   const auto phi = sphere<Dim>(Vec<Dim>::Constant(0.5), 0.31);
   const int fine = Dim == 2 ? 7 : 5;
-  for (int jump : {1, 2, unlimited_jump}) {
-    CellGraphOptions<Dim> options;
+  for (int jump : {1, 2, tree::unlimited_jump}) {
+    tree::CellGraphOptions<Dim> options;
     options.max_jump = jump;
     const auto g = tree::narrow_band<Dim>(Box<Dim>{}, phi, 1, fine, 2.0, options);
-    const InvariantReport r = g.check_invariants();
+    const tree::InvariantReport r = g.check_invariants();
     ASSERT_TRUE(r.ok()) << r.text();
     int coarsest = fine;
-    g.for_each_cell([&](CellId c) {
+    g.for_each_cell([&](tree::CellId c) {
       coarsest = std::min(coarsest, g.level(c));
       if (crosses(g, c, phi)) {
         EXPECT_EQ(g.level(c), fine);
       }
     });
     // The sphere crosses every level-1 cell; away from it the tree is as coarse as the jump allows.
-    if (jump == unlimited_jump) {
+    if (jump == tree::unlimited_jump) {
       EXPECT_EQ(coarsest, 2);
     } else {
       EXPECT_LE(coarsest, fine - 2);
@@ -134,7 +134,7 @@ TYPED_TEST(BuildersTest, NarrowBandUnderEachJump) {
 // parent leaf and k levels finer, the same largest jump, and every invariant.
 TYPED_TEST(BuildersTest, RefinedSplitsEveryLeafUniformly) {
   constexpr int Dim = TypeParam::value;
-  CellGraphOptions<Dim> options;
+  tree::CellGraphOptions<Dim> options;
   options.max_jump = 2;
   const auto base = tree::narrow_band<Dim>(Box<Dim>{}, sphere<Dim>(Vec<Dim>::Constant(0.5), 0.3), 2,
                                            Dim == 2 ? 5 : 4, 1.5, options);
@@ -143,17 +143,17 @@ TYPED_TEST(BuildersTest, RefinedSplitsEveryLeafUniformly) {
     ASSERT_TRUE(fine.check_invariants().ok()) << "k = " << k;
     EXPECT_EQ(fine.n_cells(), base.n_cells() << (Dim * k)) << "k = " << k;
     int jump_base = 0, jump_fine = 0;
-    base.for_each_face([&](FaceId f) {
+    base.for_each_face([&](tree::FaceId f) {
       const auto& g = base.face(f);
       if (!g.is_boundary()) jump_base = std::max(jump_base, std::abs(g.side_level[0] - g.side_level[1]));
     });
-    fine.for_each_face([&](FaceId f) {
+    fine.for_each_face([&](tree::FaceId f) {
       const auto& g = fine.face(f);
       if (!g.is_boundary()) jump_fine = std::max(jump_fine, std::abs(g.side_level[0] - g.side_level[1]));
     });
     EXPECT_EQ(jump_fine, jump_base);
-    fine.for_each_cell([&](CellId c) {
-      const CellId parent = base.locate(fine.centre(c));
+    fine.for_each_cell([&](tree::CellId c) {
+      const tree::CellId parent = base.locate(fine.centre(c));
       ASSERT_EQ(fine.level(c), base.level(parent) + k) << "cell " << c;
     });
   }
@@ -163,19 +163,19 @@ TYPED_TEST(BuildersTest, RefinedSplitsEveryLeafUniformly) {
 TYPED_TEST(BuildersTest, RandomTreesAreSeededAndRespectTheJump) {
   constexpr int Dim = TypeParam::value;
   const int deep = Dim == 2 ? 9 : 6;
-  for (int jump : {1, 2, 3, 4, unlimited_jump}) {
-    CellGraphOptions<Dim> options;
+  for (int jump : {1, 2, 3, 4, tree::unlimited_jump}) {
+    tree::CellGraphOptions<Dim> options;
     options.max_jump = jump;
     const auto a = tree::random<Dim>(Box<Dim>{}, 42, 1, deep, 0.35, options);
     const auto b = tree::random<Dim>(Box<Dim>{}, 42, 1, deep, 0.35, options);
     const auto c = tree::random<Dim>(Box<Dim>{}, 43, 1, deep, 0.35, options);
     EXPECT_EQ(leaf_set(a), leaf_set(b));
     EXPECT_NE(leaf_set(a), leaf_set(c));
-    const InvariantReport r = a.check_invariants();
+    const tree::InvariantReport r = a.check_invariants();
     ASSERT_TRUE(r.ok()) << r.text();
     int worst = 0;
-    a.for_each_face([&](FaceId f) {
-      const GraphFace& face = a.face(f);
+    a.for_each_face([&](tree::FaceId f) {
+      const tree::GraphFace& face = a.face(f);
       if (!face.is_boundary()) worst = std::max(worst, std::abs(face.side_level[0] - face.side_level[1]));
     });
     EXPECT_LE(worst, jump);
@@ -187,30 +187,30 @@ TYPED_TEST(BuildersTest, NarrowBandReadaptationReachesAFreshBuild) {
   constexpr int Dim = TypeParam::value;
   const int fine = Dim == 2 ? 7 : 5;
   const double h = std::ldexp(1.0, -fine);
-  for (int jump : {2, unlimited_jump}) {
-    CellGraphOptions<Dim> options;
+  for (int jump : {2, tree::unlimited_jump}) {
+    tree::CellGraphOptions<Dim> options;
     options.max_jump = jump;
     Vec<Dim> centre = Vec<Dim>::Constant(0.5);
     auto g = tree::narrow_band<Dim>(Box<Dim>{}, sphere<Dim>(centre, 0.3), 1, fine, 2.0, options);
     centre[0] += h;  // the interface moves by one fine cell
     const auto phi = sphere<Dim>(centre, 0.3);
-    std::vector<Mark> marks;
+    std::vector<tree::Mark> marks;
     int rounds = 0;
     for (; rounds < 10; ++rounds) {
       tree::mark_narrow_band<Dim>(g, phi, 1, fine, 2.0, marks);
-      const AdaptReport report = g.adapt(marks);
-      const InvariantReport r = g.check_invariants();
+      const tree::AdaptReport report = g.adapt(marks);
+      const tree::InvariantReport r = g.check_invariants();
       ASSERT_TRUE(r.ok()) << r.text();
       if (report.empty()) break;
     }
     EXPECT_LT(rounds, 10);
-    g.for_each_cell([&](CellId c) {
+    g.for_each_cell([&](tree::CellId c) {
       if (crosses(g, c, phi)) {
         EXPECT_EQ(g.level(c), fine);
       }
     });
     const auto fresh = tree::narrow_band<Dim>(Box<Dim>{}, phi, 1, fine, 2.0, options);
-    if (jump == unlimited_jump) {
+    if (jump == tree::unlimited_jump) {
       EXPECT_EQ(leaf_set(g), leaf_set(fresh));
     } else {
       // Balancing may keep a few extra cells that a fresh build never split.
@@ -220,11 +220,11 @@ TYPED_TEST(BuildersTest, NarrowBandReadaptationReachesAFreshBuild) {
 }
 
 /// The dense marks as sorted sparse lists.
-MarkList as_list(const std::vector<Mark>& marks, int capacity) {
-  MarkList out;
-  for (CellId c = 0; c < capacity; ++c) {
-    if (marks[c] == Mark::split) out.split.push_back(c);
-    if (marks[c] == Mark::merge) out.merge.push_back(c);
+tree::MarkList as_list(const std::vector<tree::Mark>& marks, int capacity) {
+  tree::MarkList out;
+  for (tree::CellId c = 0; c < capacity; ++c) {
+    if (marks[c] == tree::Mark::split) out.split.push_back(c);
+    if (marks[c] == tree::Mark::merge) out.merge.push_back(c);
   }
   return out;
 }
@@ -237,18 +237,18 @@ TYPED_TEST(BuildersTest, BandTrackerMarksWhatAFullVisitMarks) {
   // coarse, where the tracker's coarse frontier matters); bands narrow and wide.
   for (int coarse : {1, fine - 3}) {
     for (double band : {1.0, 3.0}) {
-      for (int jump : {1, 2, unlimited_jump}) {
+      for (int jump : {1, 2, tree::unlimited_jump}) {
         SCOPED_TRACE(::testing::Message() << "coarse " << coarse << " band " << band << " jump " << jump);
-        CellGraphOptions<Dim> options;
+        tree::CellGraphOptions<Dim> options;
         options.max_jump = jump;
         Vec<Dim> centre = Vec<Dim>::Constant(0.45);
         const double radius = 0.23;
         auto dense =
             tree::narrow_band<Dim>(Box<Dim>{}, sphere<Dim>(centre, radius), coarse, fine, band, options);
         auto sparse = dense;
-        NarrowBandTracker<Dim> tracker(sparse, coarse, fine, band);
-        std::vector<Mark> marks;
-        MarkList list;
+        tree::NarrowBandTracker<Dim> tracker(sparse, coarse, fine, band);
+        std::vector<tree::Mark> marks;
+        tree::MarkList list;
         // The first call visits every cell. A fresh tree can already carry marks: merges of the
         // cells the level-jump balancing split, which adapt() refuses.
         tree::mark_narrow_band<Dim>(dense, sphere<Dim>(centre, radius), coarse, fine, band, marks);
@@ -264,20 +264,20 @@ TYPED_TEST(BuildersTest, BandTrackerMarksWhatAFullVisitMarks) {
           if (coarse > 1) {  // with a level-1 background nearly every cell is refined
             EXPECT_LT(static_cast<long>(tracker.candidates().size()), sparse.n_cells());
           }
-          MarkList got = list;
+          tree::MarkList got = list;
           std::sort(got.split.begin(), got.split.end());
           std::sort(got.merge.begin(), got.merge.end());
-          const MarkList want = as_list(marks, dense.cell_capacity());
+          const tree::MarkList want = as_list(marks, dense.cell_capacity());
           ASSERT_EQ(got.split, want.split) << "step " << step;
           ASSERT_EQ(got.merge, want.merge) << "step " << step;
-          const AdaptReport a = dense.adapt(marks);
-          const AdaptReport b = sparse.adapt(list);
+          const tree::AdaptReport a = dense.adapt(marks);
+          const tree::AdaptReport b = sparse.adapt(list);
           tracker.update(sparse, b);
           EXPECT_EQ(a.new_cells, b.new_cells);
           EXPECT_EQ(a.removed_cells, b.removed_cells);
           EXPECT_EQ(a.n_refused_merge, b.n_refused_merge);
           ASSERT_EQ(leaf_set(dense), leaf_set(sparse)) << "step " << step;
-          const InvariantReport r = sparse.check_invariants();
+          const tree::InvariantReport r = sparse.check_invariants();
           ASSERT_TRUE(r.ok()) << r.text();
         }
       }
@@ -289,16 +289,16 @@ TYPED_TEST(BuildersTest, BandTrackerConvergesToAFreshBuild) {
   constexpr int Dim = TypeParam::value;
   const int fine = Dim == 2 ? 8 : 6, coarse = 2;
   const double h = std::ldexp(1.0, -fine);
-  CellGraphOptions<Dim> options;
-  options.max_jump = unlimited_jump;
+  tree::CellGraphOptions<Dim> options;
+  options.max_jump = tree::unlimited_jump;
   // Start from a uniform tree at the coarse level, one level coarser (the first round makes every
   // cell at the coarse level, which later rounds must still visit), or the root alone.
   for (int start : {coarse, coarse - 1, 0}) {
     SCOPED_TRACE(::testing::Message() << "start level " << start);
     Vec<Dim> centre = Vec<Dim>::Constant(0.5);
     auto g = tree::uniform<Dim>(Box<Dim>{}, start, options);
-    NarrowBandTracker<Dim> tracker(g, coarse, fine, 2.0);
-    MarkList marks;
+    tree::NarrowBandTracker<Dim> tracker(g, coarse, fine, 2.0);
+    tree::MarkList marks;
     for (int step = 0; step < 40; ++step) {
       if (step % 4 == 3 && step < 30) centre[0] += h;  // every fourth round, by one fine cell
       const auto phi = sphere<Dim>(centre, 0.3);
@@ -327,16 +327,16 @@ TYPED_TEST(BuildersTest, BandTrackerOnAnisotropicCells) {
     centre[0] = 1.5;
     auto dense = tree::narrow_band<Dim>(domain, sphere<Dim>(centre, 0.3), coarse, fine, band);
     auto sparse = dense;
-    NarrowBandTracker<Dim> tracker(sparse, coarse, fine, band);
-    std::vector<Mark> marks;
-    MarkList list;
+    tree::NarrowBandTracker<Dim> tracker(sparse, coarse, fine, band);
+    std::vector<tree::Mark> marks;
+    tree::MarkList list;
     tracker.mark(sparse, sphere<Dim>(centre, 0.3), list);
     for (int step = 0; step < 8; ++step) {
       centre[Dim - 1] += h;  // across the short side
       const auto phi = sphere<Dim>(centre, 0.3);
       tree::mark_narrow_band<Dim>(dense, phi, coarse, fine, band, marks);
       tracker.mark(sparse, phi, list);
-      const MarkList want = as_list(marks, dense.cell_capacity());
+      const tree::MarkList want = as_list(marks, dense.cell_capacity());
       std::sort(list.split.begin(), list.split.end());
       std::sort(list.merge.begin(), list.merge.end());
       ASSERT_EQ(list.split, want.split) << "step " << step;
@@ -353,9 +353,9 @@ TEST(MarkList, ADeadIdReusedDuringTheChangeIsNotSplit) {
   // mark on 3 must not split that child, as the dense form of the same marks would not.
   auto g = tree::uniform<2>(Box<2>{}, 2);
   g.split(3);
-  MarkList marks;
+  tree::MarkList marks;
   marks.split = {0, 3};
-  const AdaptReport r = g.adapt(marks);
+  const tree::AdaptReport r = g.adapt(marks);
   EXPECT_EQ(r.n_split, 1);
   EXPECT_EQ(g.deepest_level(), 3);
   EXPECT_TRUE(g.check_invariants().ok());
@@ -363,9 +363,9 @@ TEST(MarkList, ADeadIdReusedDuringTheChangeIsNotSplit) {
 
 TEST(MarkList, AdaptIgnoresRepeatsAndDeadIdsAndNeedsWholeGroups) {
   auto g = tree::uniform<2>(Box<2>{}, 2);
-  MarkList marks;
+  tree::MarkList marks;
   marks.split = {3, 3, 3};
-  AdaptReport r = g.adapt(marks);
+  tree::AdaptReport r = g.adapt(marks);
   EXPECT_EQ(r.n_split, 1);
   EXPECT_EQ(g.n_cells(), 16 + 3);
   EXPECT_FALSE(g.alive(3));

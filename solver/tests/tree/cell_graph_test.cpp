@@ -24,28 +24,28 @@ Box<Dim> test_domain() {
 }
 
 template <int Dim>
-void expect_ok(const CellGraph<Dim>& g) {
-  const InvariantReport r = g.check_invariants();
+void expect_ok(const tree::CellGraph<Dim>& g) {
+  const tree::InvariantReport r = g.check_invariants();
   ASSERT_TRUE(r.ok()) << r.text();
 }
 
 /// Faces as a set of (smaller key, larger key, axis, boundary) for comparing graphs.
 template <int Dim>
-std::set<std::tuple<std::uint64_t, std::uint64_t, int, int>> face_set(const CellGraph<Dim>& g) {
+std::set<std::tuple<std::uint64_t, std::uint64_t, int, int>> face_set(const tree::CellGraph<Dim>& g) {
   std::set<std::tuple<std::uint64_t, std::uint64_t, int, int>> out;
-  g.for_each_face([&](FaceId f) {
-    const GraphFace& face = g.face(f);
-    const std::uint64_t a = face.cell[0] == no_cell ? 0 : g.key(face.cell[0]);
-    const std::uint64_t b = face.cell[1] == no_cell ? 0 : g.key(face.cell[1]);
+  g.for_each_face([&](tree::FaceId f) {
+    const tree::GraphFace& face = g.face(f);
+    const std::uint64_t a = face.cell[0] == tree::no_cell ? 0 : g.key(face.cell[0]);
+    const std::uint64_t b = face.cell[1] == tree::no_cell ? 0 : g.key(face.cell[1]);
     out.emplace(a, b, face.axis, face.boundary);
   });
   return out;
 }
 
 template <int Dim>
-std::set<std::uint64_t> leaf_set(const CellGraph<Dim>& g) {
+std::set<std::uint64_t> leaf_set(const tree::CellGraph<Dim>& g) {
   std::set<std::uint64_t> out;
-  g.for_each_cell([&](CellId c) { out.insert(g.key(c)); });
+  g.for_each_cell([&](tree::CellId c) { out.insert(g.key(c)); });
   return out;
 }
 
@@ -56,17 +56,17 @@ TYPED_TEST_SUITE(CellGraphTest, Dims);
 
 TYPED_TEST(CellGraphTest, SplitAndMergeRoot) {
   constexpr int Dim = TypeParam::value;
-  CellGraph<Dim> g(test_domain<Dim>());
+  tree::CellGraph<Dim> g(test_domain<Dim>());
   EXPECT_EQ(g.n_cells(), 1);
   EXPECT_EQ(g.n_faces(), 2 * Dim);
   expect_ok(g);
-  AdaptReport report;
+  tree::AdaptReport report;
   const auto children = g.split(0, &report);
   expect_ok(g);
   EXPECT_EQ(g.n_cells(), 1 << Dim);
   // Interior faces Dim * 2^(Dim-1), boundary faces 2 * Dim * 2^(Dim-1).
   EXPECT_EQ(g.n_faces(), 3 * Dim * (1 << (Dim - 1)));
-  EXPECT_EQ(report.removed_cells, std::vector<CellId>{0});
+  EXPECT_EQ(report.removed_cells, std::vector<tree::CellId>{0});
   EXPECT_EQ(report.new_cells.size(), std::size_t(1 << Dim));
   EXPECT_EQ(report.removed_faces.size(), std::size_t(2 * Dim));
   for (int i = 0; i < (1 << Dim); ++i) {
@@ -75,29 +75,29 @@ TYPED_TEST(CellGraphTest, SplitAndMergeRoot) {
   }
   EXPECT_TRUE(g.are_siblings(children));
   EXPECT_TRUE(g.can_merge(children[1]));
-  const CellId root = g.merge(children, &report);
+  const tree::CellId root = g.merge(children, &report);
   expect_ok(g);
   EXPECT_EQ(g.n_cells(), 1);
   EXPECT_EQ(g.n_faces(), 2 * Dim);
   EXPECT_EQ(g.level(root), 0);
-  EXPECT_EQ(report.new_cells, std::vector<CellId>{root});
+  EXPECT_EQ(report.new_cells, std::vector<tree::CellId>{root});
   EXPECT_EQ(report.cell_origins.source.size(), std::size_t(1 << Dim));
 }
 
 TYPED_TEST(CellGraphTest, SideFacesReportHangingNeighbours) {
   constexpr int Dim = TypeParam::value;
-  CellGraphOptions<Dim> options;
-  options.max_jump = unlimited_jump;
-  CellGraph<Dim> g(test_domain<Dim>(), options);
+  tree::CellGraphOptions<Dim> options;
+  options.max_jump = tree::unlimited_jump;
+  tree::CellGraph<Dim> g(test_domain<Dim>(), options);
   const auto c1 = g.split(0);
   const auto c2 = g.split(c1[0]);  // the lower corner child, split again
   expect_ok(g);
   // c1[1] (upper along axis 0) sees 2^(Dim-1) finer neighbours on its lower side along axis 0.
-  std::vector<SideFace> side;
+  std::vector<tree::SideFace> side;
   g.side_faces(c1[1], 0, -1, side);
   ASSERT_EQ(side.size(), std::size_t(1 << (Dim - 1)));
-  for (const SideFace& s : side) {
-    EXPECT_EQ(s.adjacency, Adjacency::finer);
+  for (const tree::SideFace& s : side) {
+    EXPECT_EQ(s.adjacency, tree::Adjacency::finer);
     EXPECT_EQ(s.neighbour_level, 2);
     EXPECT_TRUE(g.face(s.face).hanging(1));
     EXPECT_FALSE(g.face(s.face).hanging(0));
@@ -106,15 +106,15 @@ TYPED_TEST(CellGraphTest, SideFacesReportHangingNeighbours) {
   // c2[1] sees the coarser c1[1] across its upper side, and the boundary on none of its sides.
   g.side_faces(c2[1], 0, +1, side);
   ASSERT_EQ(side.size(), 1u);
-  EXPECT_EQ(side[0].adjacency, Adjacency::coarser);
+  EXPECT_EQ(side[0].adjacency, tree::Adjacency::coarser);
   EXPECT_EQ(side[0].neighbour, c1[1]);
   g.side_faces(c2[0], 0, -1, side);
   ASSERT_EQ(side.size(), 1u);
-  EXPECT_EQ(side[0].adjacency, Adjacency::boundary);
+  EXPECT_EQ(side[0].adjacency, tree::Adjacency::boundary);
   EXPECT_EQ(g.face(side[0].face).boundary, 0);
   g.side_faces(c2[0], 0, +1, side);
   ASSERT_EQ(side.size(), 1u);
-  EXPECT_EQ(side[0].adjacency, Adjacency::same);
+  EXPECT_EQ(side[0].adjacency, tree::Adjacency::same);
   EXPECT_EQ(side[0].neighbour, c2[1]);
   const Vec<Dim> fc = g.face_centre(side[0].face);
   EXPECT_NEAR(fc[0], g.box(c2[0]).hi[0], 1e-15);
@@ -123,9 +123,9 @@ TYPED_TEST(CellGraphTest, SideFacesReportHangingNeighbours) {
 TYPED_TEST(CellGraphTest, SplittingEnforcesTheLevelJump) {
   constexpr int Dim = TypeParam::value;
   for (int jump : {1, 2, 3}) {
-    CellGraphOptions<Dim> options;
+    tree::CellGraphOptions<Dim> options;
     options.max_jump = jump;
-    CellGraph<Dim> g(test_domain<Dim>(), options);
+    tree::CellGraph<Dim> g(test_domain<Dim>(), options);
     g.split(0);
     // Refine 6 times at a point just below the root's mid-plane along axis 0: the level-1 cells
     // across that plane would end up 6 levels coarser without balancing.
@@ -133,7 +133,7 @@ TYPED_TEST(CellGraphTest, SplittingEnforcesTheLevelJump) {
     corner[0] -= 1e-9;
     long forced = 0;
     for (int k = 0; k < 6; ++k) {
-      AdaptReport r;
+      tree::AdaptReport r;
       g.split(g.locate(corner), &r);
       forced += r.n_balance_splits;
       expect_ok(g);
@@ -141,8 +141,8 @@ TYPED_TEST(CellGraphTest, SplittingEnforcesTheLevelJump) {
     EXPECT_EQ(g.level(g.locate(corner)), 7);
     EXPECT_GT(forced, 0) << "jump " << jump;
     int worst = 0;
-    g.for_each_face([&](FaceId f) {
-      const GraphFace& face = g.face(f);
+    g.for_each_face([&](tree::FaceId f) {
+      const tree::GraphFace& face = g.face(f);
       if (!face.is_boundary()) worst = std::max(worst, std::abs(face.side_level[0] - face.side_level[1]));
     });
     EXPECT_EQ(worst, jump);
@@ -151,21 +151,21 @@ TYPED_TEST(CellGraphTest, SplittingEnforcesTheLevelJump) {
 
 TYPED_TEST(CellGraphTest, MergeRefusedWhereItBreaksTheJump) {
   constexpr int Dim = TypeParam::value;
-  CellGraphOptions<Dim> options;
+  tree::CellGraphOptions<Dim> options;
   options.max_jump = 1;
-  CellGraph<Dim> g(test_domain<Dim>(), options);
+  tree::CellGraph<Dim> g(test_domain<Dim>(), options);
   const auto c1 = g.split(0);
   const auto c2 = g.split(c1[0]);
   g.split(c2[(1 << Dim) - 1]);  // level 3 next to c1's other children: they must split
   expect_ok(g);
   // A group of leaf siblings at level 2 next to a level-3 cell cannot merge under jump 1.
   int n_refused = 0;
-  for (CellId c : g.cell_ids()) {
+  for (tree::CellId c : g.cell_ids()) {
     if (g.level(c) != 2 || !g.siblings(c) || morton::child_index<Dim>(g.key(c)) != 0) continue;
     const auto group = *g.siblings(c);
     bool next_to_finer = false;
-    for (CellId s : group)
-      for (FaceId f : g.faces(s)) next_to_finer = next_to_finer || g.face(f).level() == 3;
+    for (tree::CellId s : group)
+      for (tree::FaceId f : g.faces(s)) next_to_finer = next_to_finer || g.face(f).level() == 3;
     EXPECT_EQ(g.can_merge(c), !next_to_finer);
     if (next_to_finer) {
       ++n_refused;
@@ -176,16 +176,16 @@ TYPED_TEST(CellGraphTest, MergeRefusedWhereItBreaksTheJump) {
   expect_ok(g);
   EXPECT_FALSE(g.can_merge(c2[0]));  // c2's group is not all leaves
   // Not siblings: cells of different parents.
-  std::array<CellId, (1 << Dim)> mixed = c2;
+  std::array<tree::CellId, (1 << Dim)> mixed = c2;
   mixed[0] = c1[1];
   EXPECT_FALSE(g.are_siblings(mixed));
   EXPECT_THROW(g.merge(mixed), Error);
   // min_level is respected by adapt.
-  CellGraphOptions<Dim> floor_options;
+  tree::CellGraphOptions<Dim> floor_options;
   floor_options.min_level = 1;
-  CellGraph<Dim> h = tree::uniform<Dim>(test_domain<Dim>(), 1, floor_options);
-  std::vector<Mark> marks(h.cell_capacity(), Mark::merge);
-  const AdaptReport r = h.adapt(marks);
+  tree::CellGraph<Dim> h = tree::uniform<Dim>(test_domain<Dim>(), 1, floor_options);
+  std::vector<tree::Mark> marks(h.cell_capacity(), tree::Mark::merge);
+  const tree::AdaptReport r = h.adapt(marks);
   EXPECT_EQ(r.n_merged, 0);
   EXPECT_EQ(r.n_refused_merge, 1 << Dim);
   EXPECT_EQ(h.n_cells(), 1 << Dim);
@@ -194,24 +194,24 @@ TYPED_TEST(CellGraphTest, MergeRefusedWhereItBreaksTheJump) {
 TYPED_TEST(CellGraphTest, BulkBuildEqualsIncrementalSplits) {
   constexpr int Dim = TypeParam::value;
   const Box<Dim> domain = test_domain<Dim>();
-  for (int jump : {1, 2, unlimited_jump}) {
-    CellGraphOptions<Dim> options;
+  for (int jump : {1, 2, tree::unlimited_jump}) {
+    tree::CellGraphOptions<Dim> options;
     options.max_jump = jump;
-    const CellGraph<Dim> bulk = tree::random<Dim>(domain, 7 + jump, 1, Dim == 2 ? 6 : 4, 0.3, options);
+    const tree::CellGraph<Dim> bulk = tree::random<Dim>(domain, 7 + jump, 1, Dim == 2 ? 6 : 4, 0.3, options);
     expect_ok(bulk);
     // The random predicate's own tree (no balancing), split top-down; balancing forces the rest.
-    const CellGraph<Dim> raw =
+    const tree::CellGraph<Dim> raw =
         tree::random<Dim>(domain, 7 + jump, 1, Dim == 2 ? 6 : 4, 0.3,
-                          CellGraphOptions<Dim>{unlimited_jump, 0, morton::max_level<Dim>});
+                          tree::CellGraphOptions<Dim>{tree::unlimited_jump, 0, morton::max_level<Dim>});
     std::vector<std::uint64_t> interior;
     for (std::uint64_t k : leaf_set(raw))
       for (std::uint64_t a = k >> Dim; a >= 1; a >>= Dim) interior.push_back(a);
     std::sort(interior.begin(), interior.end());
     interior.erase(std::unique(interior.begin(), interior.end()), interior.end());
-    CellGraph<Dim> inc(domain, options);
+    tree::CellGraph<Dim> inc(domain, options);
     for (std::uint64_t k : interior) {  // ascending keys: parents before children
-      const CellId c = inc.find(morton::key_level<Dim>(k), morton::key_address<Dim>(k));
-      if (c != no_cell) inc.split(c);
+      const tree::CellId c = inc.find(morton::key_level<Dim>(k), morton::key_address<Dim>(k));
+      if (c != tree::no_cell) inc.split(c);
     }
     expect_ok(inc);
     EXPECT_EQ(leaf_set(inc), leaf_set(bulk)) << "jump " << jump;
@@ -222,7 +222,7 @@ TYPED_TEST(CellGraphTest, BulkBuildEqualsIncrementalSplits) {
 TYPED_TEST(CellGraphTest, PointLocationMatchesBruteForce) {
   constexpr int Dim = TypeParam::value;
   const Box<Dim> domain = test_domain<Dim>();
-  const CellGraph<Dim> g = tree::random<Dim>(domain, 3, 1, Dim == 2 ? 8 : 5, 0.4, {});
+  const tree::CellGraph<Dim> g = tree::random<Dim>(domain, 3, 1, Dim == 2 ? 8 : 5, 0.4, {});
   const auto ids = g.cell_ids();
   std::mt19937_64 rng(11);
   std::uniform_real_distribution<double> u(0.0, 1.0);
@@ -239,13 +239,13 @@ TYPED_TEST(CellGraphTest, PointLocationMatchesBruteForce) {
     points.push_back(b.lo);
     points.push_back(b.hi);
   }
-  std::vector<CellId> found(points.size());
+  std::vector<tree::CellId> found(points.size());
   g.locate(points, found);
   for (std::size_t i = 0; i < points.size(); ++i) {
     const Vec<Dim>& x = points[i];
-    CellId brute = no_cell;
+    tree::CellId brute = tree::no_cell;
     int n_holding = 0;
-    for (CellId c : ids) {
+    for (tree::CellId c : ids) {
       if (g.box(c).contains(x)) {
         ++n_holding;
         brute = c;
@@ -271,13 +271,13 @@ TYPED_TEST(CellGraphTest, PointLocationMatchesBruteForce) {
 TYPED_TEST(CellGraphTest, KRingMatchesBruteForceAdjacency) {
   constexpr int Dim = TypeParam::value;
   const Box<Dim> domain = test_domain<Dim>();
-  for (int jump : {1, 3, unlimited_jump}) {
-    CellGraphOptions<Dim> options;
+  for (int jump : {1, 3, tree::unlimited_jump}) {
+    tree::CellGraphOptions<Dim> options;
     options.max_jump = jump;
-    const CellGraph<Dim> g = tree::random<Dim>(domain, 5, 1, Dim == 2 ? 7 : 4, 0.45, options);
+    const tree::CellGraph<Dim> g = tree::random<Dim>(domain, 5, 1, Dim == 2 ? 7 : 4, 0.45, options);
     const auto ids = g.cell_ids();
     // Brute force: two leaves are adjacent when their boxes share a face of positive area.
-    std::vector<std::vector<CellId>> adj(g.cell_capacity());
+    std::vector<std::vector<tree::CellId>> adj(g.cell_capacity());
     for (std::size_t i = 0; i < ids.size(); ++i) {
       const Box<Dim> a = g.box(ids[i]);
       for (std::size_t j = i + 1; j < ids.size(); ++j) {
@@ -295,14 +295,14 @@ TYPED_TEST(CellGraphTest, KRingMatchesBruteForceAdjacency) {
         }
       }
     }
-    std::vector<CellId> ring;
+    std::vector<tree::CellId> ring;
     for (std::size_t t = 0; t < ids.size(); t += std::max<std::size_t>(1, ids.size() / 40)) {
-      const CellId c = ids[t];
+      const tree::CellId c = ids[t];
       std::vector<int> dist(g.cell_capacity(), -1);
-      std::vector<CellId> queue{c};
+      std::vector<tree::CellId> queue{c};
       dist[c] = 0;
       for (std::size_t q = 0; q < queue.size(); ++q)
-        for (CellId o : adj[queue[q]])
+        for (tree::CellId o : adj[queue[q]])
           if (dist[o] < 0) {
             dist[o] = dist[queue[q]] + 1;
             queue.push_back(o);
@@ -310,8 +310,8 @@ TYPED_TEST(CellGraphTest, KRingMatchesBruteForceAdjacency) {
       for (int k : {0, 1, 2, 3}) {
         g.k_ring(c, k, ring);
         ASSERT_EQ(ring.front(), c);
-        std::set<CellId> expect, got(ring.begin(), ring.end());
-        for (CellId o : ids)
+        std::set<tree::CellId> expect, got(ring.begin(), ring.end());
+        for (tree::CellId o : ids)
           if (dist[o] >= 0 && dist[o] <= k) expect.insert(o);
         ASSERT_EQ(got.size(), ring.size()) << "duplicates in the ring";
         ASSERT_EQ(got, expect) << "cell " << c << " k " << k << " jump " << jump;
@@ -327,7 +327,7 @@ namespace liquid {
 namespace {
 
 template <int Dim>
-void expect_same_state(const CellGraphState<Dim>& a, const CellGraphState<Dim>& b) {
+void expect_same_state(const tree::CellGraphState<Dim>& a, const tree::CellGraphState<Dim>& b) {
   EXPECT_EQ(a.level, b.level);
   EXPECT_EQ(a.address, b.address);
   EXPECT_EQ(a.faces, b.faces);
@@ -346,13 +346,13 @@ TYPED_TEST_SUITE(CellGraphStateTest, StateDims);
 TYPED_TEST(CellGraphStateTest, RestoredGraphEvolvesLikeTheOriginal) {
   constexpr int Dim = TypeParam::value;
   const Box<Dim> domain = test_domain<Dim>();
-  CellGraph<Dim> g =
+  tree::CellGraph<Dim> g =
       tree::narrow_band<Dim>(domain, levelset::sphere<Dim>(Vec<Dim>::Zero(), 0.6), 1, Dim == 2 ? 5 : 3, 1.5);
   std::mt19937 rng(7);
-  const auto random_marks = [&](const CellGraph<Dim>& graph) {
-    MarkList m;
+  const auto random_marks = [&](const tree::CellGraph<Dim>& graph) {
+    tree::MarkList m;
     std::uniform_int_distribution<int> pick(0, 9);
-    graph.for_each_cell([&](CellId c) {
+    graph.for_each_cell([&](tree::CellId c) {
       const int r = pick(rng);
       if (r == 0) m.split.push_back(c);
       if (r >= 6) m.merge.push_back(c);
@@ -360,18 +360,18 @@ TYPED_TEST(CellGraphStateTest, RestoredGraphEvolvesLikeTheOriginal) {
     return m;
   };
   for (int round = 0; round < 3; ++round) {  // ids recycled, free lists non-empty
-    MarkList m = random_marks(g);
+    tree::MarkList m = random_marks(g);
     g.adapt(m);
   }
   ASSERT_FALSE(g.state().free_cells.empty());
-  CellGraph<Dim> h = CellGraph<Dim>::from_state(g.state());
+  tree::CellGraph<Dim> h = tree::CellGraph<Dim>::from_state(g.state());
   expect_ok(h);
   expect_same_state(g.state(), h.state());
   EXPECT_EQ(g.n_cells(), h.n_cells());
   EXPECT_EQ(g.deepest_level(), h.deepest_level());
   for (int round = 0; round < 3; ++round) {
-    MarkList m = random_marks(g), m2 = m;
-    const AdaptReport ra = g.adapt(m), rb = h.adapt(m2);
+    tree::MarkList m = random_marks(g), m2 = m;
+    const tree::AdaptReport ra = g.adapt(m), rb = h.adapt(m2);
     EXPECT_EQ(ra.new_cells, rb.new_cells);
     EXPECT_EQ(ra.new_faces, rb.new_faces);
     expect_same_state(g.state(), h.state());
@@ -382,13 +382,13 @@ TYPED_TEST(CellGraphStateTest, RestoredGraphEvolvesLikeTheOriginal) {
 
 TYPED_TEST(CellGraphStateTest, BrokenStateIsRefusedWithTheProblemNamed) {
   constexpr int Dim = TypeParam::value;
-  const CellGraph<Dim> g = tree::uniform<Dim>(test_domain<Dim>(), 2);
-  CellGraphState<Dim> s = g.state();
+  const tree::CellGraph<Dim> g = tree::uniform<Dim>(test_domain<Dim>(), 2);
+  tree::CellGraphState<Dim> s = g.state();
   s.address.pop_back();
   EXPECT_THROW(
       {
         try {
-          CellGraph<Dim>::from_state(s);
+          tree::CellGraph<Dim>::from_state(s);
         } catch (const Error& e) {
           EXPECT_NE(std::string(e.what()).find("addresses"), std::string::npos) << e.what();
           throw;
@@ -396,11 +396,11 @@ TYPED_TEST(CellGraphStateTest, BrokenStateIsRefusedWithTheProblemNamed) {
       },
       Error);
   s = g.state();
-  s.faces[CellGraphState<Dim>::face_record * 5] = 9999;  // a face naming a cell that does not exist
-  EXPECT_THROW(CellGraph<Dim>::from_state(s), Error);
+  s.faces[tree::CellGraphState<Dim>::face_record * 5] = 9999;  // a face naming a cell that does not exist
+  EXPECT_THROW(tree::CellGraph<Dim>::from_state(s), Error);
   s = g.state();
   s.level[3] = 1;  // a cell at the wrong level: the faces no longer tile
-  EXPECT_THROW(CellGraph<Dim>::from_state(s), Error);
+  EXPECT_THROW(tree::CellGraph<Dim>::from_state(s), Error);
 }
 
 }  // namespace

@@ -22,10 +22,10 @@ class Property {
  public:
   Property(int jump, std::uint64_t seed) : rng_(seed), graph_(make(jump, seed)) {
     cell_.resize(graph_.cell_capacity());
-    for (CellId c = 0; c < graph_.cell_capacity(); ++c)
+    for (tree::CellId c = 0; c < graph_.cell_capacity(); ++c)
       cell_[c] = std::uniform_real_distribution<double>(-1, 1)(rng_);
     face_.resize(graph_.face_capacity());
-    graph_.for_each_face([&](FaceId f) { face_[f] = 1.0 + graph_.face(f).axis; });
+    graph_.for_each_face([&](tree::FaceId f) { face_[f] = 1.0 + graph_.face(f).axis; });
     integral_ = integral();
   }
 
@@ -36,16 +36,17 @@ class Property {
     const auto ids = graph_.cell_ids();
     const double u = std::uniform_real_distribution<double>(0, 1)(rng_);
     const bool crowded = graph_.n_cells() > max_cells;
-    AdaptReport report;
+    tree::AdaptReport report;
     if (u < 0.1) {
       // Dense marks, or the same kind of marks as sparse lists in random order with repeats.
-      std::vector<Mark> marks(graph_.cell_capacity(), Mark::keep);
-      MarkList list;
-      for (CellId x : ids) {
+      std::vector<tree::Mark> marks(graph_.cell_capacity(), tree::Mark::keep);
+      tree::MarkList list;
+      for (tree::CellId x : ids) {
         const double v = std::uniform_real_distribution<double>(0, 1)(rng_);
-        marks[x] = v < (crowded ? 0.01 : 0.05) ? Mark::split : (v < 0.6 ? Mark::merge : Mark::keep);
-        if (marks[x] != Mark::keep) {
-          auto& l = marks[x] == Mark::split ? list.split : list.merge;
+        marks[x] = v < (crowded ? 0.01 : 0.05) ? tree::Mark::split
+                                               : (v < 0.6 ? tree::Mark::merge : tree::Mark::keep);
+        if (marks[x] != tree::Mark::keep) {
+          auto& l = marks[x] == tree::Mark::split ? list.split : list.merge;
           l.push_back(x);
           if (v < 0.02 || (v > 0.3 && v < 0.32)) l.push_back(x);
         }
@@ -60,17 +61,17 @@ class Property {
       ++n_adapts_;
     } else if (u < 0.6 && !crowded) {
       // A few draws for a cell that can still split: uniform picks favour the finest cells.
-      CellId c = ids[std::uniform_int_distribution<std::size_t>(0, ids.size() - 1)(rng_)];
+      tree::CellId c = ids[std::uniform_int_distribution<std::size_t>(0, ids.size() - 1)(rng_)];
       for (int k = 0; k < 8 && graph_.level(c) >= max_level; ++k)
         c = ids[std::uniform_int_distribution<std::size_t>(0, ids.size() - 1)(rng_)];
       if (graph_.level(c) >= max_level) return;
       const int before = graph_.n_cells();
       const auto children = graph_.split(c, &report);
-      for (CellId k : children) ASSERT_TRUE(graph_.alive(k));
+      for (tree::CellId k : children) ASSERT_TRUE(graph_.alive(k));
       ASSERT_GE(graph_.n_cells(), before + (1 << Dim) - 1);
       n_splits_ += report.n_split;  // balancing splits included
     } else {
-      const CellId c = ids[std::uniform_int_distribution<std::size_t>(0, ids.size() - 1)(rng_)];
+      const tree::CellId c = ids[std::uniform_int_distribution<std::size_t>(0, ids.size() - 1)(rng_)];
       const auto group = graph_.siblings(c);
       if (!group) return;
       if (!graph_.can_merge(c)) {
@@ -80,58 +81,59 @@ class Property {
         ++n_refused_;
         return;
       }
-      const CellId p = graph_.merge(*group, &report);
+      const tree::CellId p = graph_.merge(*group, &report);
       ASSERT_TRUE(graph_.alive(p));
       ++n_merges_;
     }
     check(report);
   }
 
-  void check(const AdaptReport& report) {
-    const InvariantReport inv = graph_.check_invariants();
+  void check(const tree::AdaptReport& report) {
+    const tree::InvariantReport inv = graph_.check_invariants();
     ASSERT_TRUE(inv.ok()) << inv.text();
-    std::set<CellId> fresh(report.new_cells.begin(), report.new_cells.end());
-    for (CellId c : report.new_cells) ASSERT_TRUE(graph_.alive(c));
-    for (CellId c : report.removed_cells) {
+    std::set<tree::CellId> fresh(report.new_cells.begin(), report.new_cells.end());
+    for (tree::CellId c : report.new_cells) ASSERT_TRUE(graph_.alive(c));
+    for (tree::CellId c : report.removed_cells) {
       ASSERT_FALSE(graph_.alive(c));
       ASSERT_EQ(fresh.count(c), 0u);
     }
-    std::set<FaceId> fresh_faces(report.new_faces.begin(), report.new_faces.end());
-    for (FaceId f : report.new_faces) ASSERT_TRUE(graph_.face_alive(f));
-    for (FaceId f : report.removed_faces) {
+    std::set<tree::FaceId> fresh_faces(report.new_faces.begin(), report.new_faces.end());
+    for (tree::FaceId f : report.new_faces) ASSERT_TRUE(graph_.face_alive(f));
+    for (tree::FaceId f : report.removed_faces) {
       ASSERT_FALSE(graph_.face_alive(f));
       ASSERT_EQ(fresh_faces.count(f), 0u);
     }
-    for (const Origins* o : {&report.cell_origins, &report.face_origins}) {
+    for (const tree::Origins* o : {&report.cell_origins, &report.face_origins}) {
       for (std::size_t i = 0; i + 1 < o->begin.size(); ++i) {
         double sum = 0.0;
         for (int k = o->begin[i]; k < o->begin[i + 1]; ++k) sum += o->weight[k];
         ASSERT_NEAR(sum, 1.0, 1e-12);
       }
     }
-    remap::cell_field(graph_, report, cell_);
-    remap::face_field(graph_, report, face_);
+    tree::remap::cell_field(graph_, report, cell_);
+    tree::remap::face_field(graph_, report, face_);
     ASSERT_NEAR(integral(), integral_, 1e-12 * (1.0 + std::abs(integral_)));
-    graph_.for_each_face([&](FaceId f) { ASSERT_EQ(face_[f], 1.0 + graph_.face(f).axis) << "face " << f; });
-    graph_.for_each_face([&](FaceId f) {
-      const GraphFace& g = graph_.face(f);
+    graph_.for_each_face(
+        [&](tree::FaceId f) { ASSERT_EQ(face_[f], 1.0 + graph_.face(f).axis) << "face " << f; });
+    graph_.for_each_face([&](tree::FaceId f) {
+      const tree::GraphFace& g = graph_.face(f);
       if (!g.is_boundary()) worst_jump_ = std::max(worst_jump_, std::abs(g.side_level[0] - g.side_level[1]));
     });
   }
 
   double integral() const {
     double sum = 0.0;
-    graph_.for_each_cell([&](CellId c) { sum += cell_[c] * graph_.volume(c); });
+    graph_.for_each_cell([&](tree::CellId c) { sum += cell_[c] * graph_.volume(c); });
     return sum;
   }
 
-  const CellGraph<Dim>& graph() const { return graph_; }
+  const tree::CellGraph<Dim>& graph() const { return graph_; }
   int worst_jump() const { return worst_jump_; }
   long n_splits_ = 0, n_merges_ = 0, n_adapts_ = 0, n_refused_ = 0;
 
  private:
-  static CellGraph<Dim> make(int jump, std::uint64_t seed) {
-    CellGraphOptions<Dim> options;
+  static tree::CellGraph<Dim> make(int jump, std::uint64_t seed) {
+    tree::CellGraphOptions<Dim> options;
     options.max_jump = jump;
     options.max_level = max_level;
     Box<Dim> domain;
@@ -140,7 +142,7 @@ class Property {
   }
 
   std::mt19937_64 rng_;
-  CellGraph<Dim> graph_;
+  tree::CellGraph<Dim> graph_;
   std::vector<double> cell_, face_;
   double integral_ = 0.0;
   int worst_jump_ = 0;
@@ -153,7 +155,7 @@ void run(int jump, int n_ops) {
   const int n_seeds = 4;
   for (std::uint64_t seed = 1; seed <= n_seeds; ++seed) {
     Property<Dim> p(jump, seed * 1000 + jump);
-    p.check(AdaptReport{});
+    p.check(tree::AdaptReport{});
     for (int i = 0; i < n_ops / n_seeds; ++i) {
       p.step();
       if (::testing::Test::HasFatalFailure()) {
@@ -206,7 +208,7 @@ TEST(CellGraphProperty, Jump4In2D) {
   run<2>(4, n_ops_2d);
 }
 TEST(CellGraphProperty, Unlimited2D) {
-  run<2>(unlimited_jump, n_ops_2d);
+  run<2>(tree::unlimited_jump, n_ops_2d);
 }
 TEST(CellGraphProperty, Graded3D) {
   run<3>(1, n_ops_3d);
@@ -221,7 +223,7 @@ TEST(CellGraphProperty, Jump4In3D) {
   run<3>(4, n_ops_3d);
 }
 TEST(CellGraphProperty, Unlimited3D) {
-  run<3>(unlimited_jump, n_ops_3d);
+  run<3>(tree::unlimited_jump, n_ops_3d);
 }
 
 }  // namespace

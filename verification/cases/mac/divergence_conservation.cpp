@@ -46,23 +46,23 @@ void study(int level_min, int level_max, Table& table, CaseResult& result) {
   const auto circle = levelset::sphere<Dim>(Vec<Dim>::Constant(0.5 * pi), 0.9);
   std::vector<double> hs, e_fv, e_rbf;
   for (int level = level_min; level <= level_max; ++level) {
-    const CellGraph<Dim> g = tree::narrow_band<Dim>(domain, circle, level, level + 2, 2.0);
+    const tree::CellGraph<Dim> g = tree::narrow_band<Dim>(domain, circle, level, level + 2, 2.0);
     std::vector<double> u(g.face_capacity(), 0.0);
     double boundary = 0.0, total = 0.0;
-    g.for_each_face([&](FaceId f) {
-      const GraphFace& gf = g.face(f);
+    g.for_each_face([&](tree::FaceId f) {
+      const tree::GraphFace& gf = g.face(f);
       u[f] = velocity<Dim>(g.face_centre(f), gf.axis);
       const double flux = u[f] * g.face_area(f);
       total += std::abs(flux);
-      if (gf.is_boundary()) boundary += gf.cell[0] != no_cell ? flux : -flux;
+      if (gf.is_boundary()) boundary += gf.cell[0] != tree::no_cell ? flux : -flux;
     });
     const auto fv = mac::fv_divergence<Dim>(g, u);
     const auto rbf = mac::rbf_divergence<Dim>(g, u);
     double err_fv = 0, err_rbf = 0, err_fv_t = 0, err_rbf_t = 0, sum_fv = 0, sum_rbf = 0, h = 1e300;
-    g.for_each_cell([&](CellId c) {
+    g.for_each_cell([&](tree::CellId c) {
       const double exact = exact_divergence<Dim>(g.centre(c));
       bool tjunction = false;
-      for (FaceId f : g.faces(c)) tjunction = tjunction || g.face(f).hanging();
+      for (tree::FaceId f : g.faces(c)) tjunction = tjunction || g.face(f).hanging();
       err_fv = std::max(err_fv, std::abs(fv[c] - exact));
       err_rbf = std::max(err_rbf, std::abs(rbf[c] - exact));
       if (tjunction) {

@@ -73,14 +73,14 @@ struct Side {
 };
 
 std::vector<Frame> run_side(const Side& side, int level, CaseResult& result, bool check_estimator) {
-  PicOptions<2> o;
+  pic::PicOptions<2> o;
   o.adaptive = side.adaptive;
-  o.transfer = side.adaptive ? PicTransfer::rbf : PicTransfer::apic;
+  o.transfer = side.adaptive ? pic::PicTransfer::rbf : pic::PicTransfer::apic;
   o.finest_level = level;
   o.coarse_level = side.adaptive ? 3 : level;
   o.max_jump = 2;
   if (side.adaptive) o.apply_paper_preset();  // the paper's claim, so the paper's transfer and reseeding
-  AdaptivePic<2> sim(o);
+  pic::AdaptivePic<2> sim(o);
   sim.seed(levelset::unite<2>(levelset::box<2>({Vec<2>::Zero(), Vec<2>(1.0, 0.3)}),
                               levelset::sphere<2>(Vec<2>(0.5, 0.7), 0.1)),
            [](const Vec<2>& x) { return x[1] > 0.45 ? Vec<2>(0.0, -1.0) : Vec<2>::Zero(); });

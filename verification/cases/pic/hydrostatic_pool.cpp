@@ -37,8 +37,8 @@ constexpr double kDepth = 0.5, kGravity = 9.81;
 struct Method {
   const char* name;
   bool adaptive;
-  PicTransfer transfer;
-  PicProjection projection = PicProjection::volume;
+  pic::PicTransfer transfer;
+  pic::PicProjection projection = pic::PicProjection::volume;
   /// The paper's preset (PHS r^5 + degree 2 transfers, the paper's reseeding) instead of the
   /// defaults (PHS r^3 + degree 1, holes-only reseeding).
   bool paper = false;
@@ -48,14 +48,15 @@ struct Method {
 // does not keep the pool still: beta follows the particles' sampling, which varies along the
 // floor, so g / beta has a curl that no pressure balances and the pool starts to stir (measured,
 // gated and warned about; not held to the bounds below).
-const Method kMethods[] = {{"regular-pic", false, PicTransfer::pic},
-                           {"adaptive-rbf-paper", true, PicTransfer::rbf, PicProjection::volume, true},
-                           {"regular-flip", false, PicTransfer::flip},
-                           {"regular-apic", false, PicTransfer::apic},
-                           {"regular-pic-mass", false, PicTransfer::pic, PicProjection::mass},
-                           {"regular-pic-split", false, PicTransfer::pic, PicProjection::split},
-                           {"regular-apic-split", false, PicTransfer::apic, PicProjection::split},
-                           {"adaptive-rbf", true, PicTransfer::rbf}};
+const Method kMethods[] = {
+    {"regular-pic", false, pic::PicTransfer::pic},
+    {"adaptive-rbf-paper", true, pic::PicTransfer::rbf, pic::PicProjection::volume, true},
+    {"regular-flip", false, pic::PicTransfer::flip},
+    {"regular-apic", false, pic::PicTransfer::apic},
+    {"regular-pic-mass", false, pic::PicTransfer::pic, pic::PicProjection::mass},
+    {"regular-pic-split", false, pic::PicTransfer::pic, pic::PicProjection::split},
+    {"regular-apic-split", false, pic::PicTransfer::apic, pic::PicProjection::split},
+    {"adaptive-rbf", true, pic::PicTransfer::rbf}};
 
 struct Outcome {
   double volume_drift = 0.0, height_drift = 0.0, particle_speed = 0.0, face_speed = 0.0, pressure = 0.0;
@@ -68,12 +69,12 @@ const char* const kPhases[] = {"classify", "grid",        "p2g", "forces", "grav
                                "project",  "extrapolate", "g2p", "advect", "reseed",  "total"};
 
 template <int Dim>
-double fluid_volume(const AdaptivePic<Dim>& sim) {
+double fluid_volume(const pic::AdaptivePic<Dim>& sim) {
   return pic::volume_of<Dim>(sim.graph(), sim.classification().fluid);
 }
 
 template <int Dim>
-double top(const AdaptivePic<Dim>& sim) {
+double top(const pic::AdaptivePic<Dim>& sim) {
   double y = 0.0;
   for (const auto& x : sim.particles().x) y = std::max(y, x[1]);
   return y;
@@ -81,16 +82,17 @@ double top(const AdaptivePic<Dim>& sim) {
 
 template <int Dim>
 Outcome run_pool(const Method& m, bool full, Table& series) {
-  PicOptions<Dim> o;
+  pic::PicOptions<Dim> o;
   o.domain = Box<Dim>{Vec<Dim>::Zero(), Vec<Dim>::Ones()};
   o.adaptive = m.adaptive;
   o.finest_level = Dim == 2 ? 6 : 4;
   o.coarse_level = Dim == 2 ? 3 : 2;
   o.transfer = m.transfer;
   o.projection = m.projection;
-  o.solver.kind = default_ppe_solver(m.adaptive, Dim);  // as a scene file would: PCG on the regular grid
+  o.solver.kind =
+      scene::default_ppe_solver(m.adaptive, Dim);  // as a scene file would: PCG on the regular grid
   if (m.paper) o.apply_paper_preset();
-  AdaptivePic<Dim> sim(o);
+  pic::AdaptivePic<Dim> sim(o);
   Vec<Dim> hi = Vec<Dim>::Ones();
   hi[1] = kDepth;
   sim.seed(levelset::box<Dim>({Vec<Dim>::Zero(), hi}));
@@ -102,7 +104,7 @@ Outcome run_pool(const Method& m, bool full, Table& series) {
   double next_row = 0.0;
   while (sim.time() < end - 1e-12) {
     const double dt = std::min(sim.stable_dt(1.0, 0.02), end - sim.time());
-    const PicStepReport r = sim.advance(dt);
+    const pic::PicStepReport r = sim.advance(dt);
     ++out.steps;
     out.fluid_cells += static_cast<double>(r.n_fluid_cells);
     out.particles += static_cast<double>(r.n_particles);
@@ -112,7 +114,7 @@ Outcome run_pool(const Method& m, bool full, Table& series) {
     for (const auto& v : sim.particles().v) vp = std::max(vp, v.norm());
     const auto& g = sim.graph();
     const auto u = sim.face_velocity();
-    g.for_each_face([&](FaceId f) {
+    g.for_each_face([&](tree::FaceId f) {
       if (sim.classification().wet(g.face(f))) vf = std::max(vf, std::abs(u[f]));
     });
     out.particle_speed = std::max(out.particle_speed, vp / v_ref);
@@ -128,7 +130,7 @@ Outcome run_pool(const Method& m, bool full, Table& series) {
   out.fluid_cells /= static_cast<double>(out.steps);
   out.particles /= static_cast<double>(out.steps);
   const auto p = sim.pressure();
-  for (CellId c : sim.classification().fluid) {
+  for (tree::CellId c : sim.classification().fluid) {
     const double exact = kGravity * (kDepth - sim.graph().centre(c)[1]);
     out.pressure = std::max(out.pressure, std::abs(p[c] - exact) / (kGravity * kDepth));
   }
@@ -158,7 +160,7 @@ void study(const CaseOptions& options, Table& table, Table& series, Table& phase
     result.gate.push_back(
         {key + " max particle speed", GateFigure::Kind::error, std::max(o.particle_speed, 1e-6)});
     result.gate.push_back({key + " pressure error", GateFigure::Kind::error, std::max(o.pressure, 1e-6)});
-    if (m.projection == PicProjection::mass) {
+    if (m.projection == pic::PicProjection::mass) {
       result.warnings.push_back(fmt::format(
           "{}: the mass projection stirs the still pool: particle speed up to {:.2e} sqrt(gH), volume drift "
           "{:.2e}, pressure error {:.2e} gH",

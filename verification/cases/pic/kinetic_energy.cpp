@@ -67,8 +67,8 @@ struct Energies {
 enum class Shares { cell_shares, fixed_masses };
 
 template <int Dim>
-Energies energies(const AdaptivePic<Dim>& sim, double volume, Shares shares) {
-  const Particles<Dim>& p = sim.particles();
+Energies energies(const pic::AdaptivePic<Dim>& sim, double volume, Shares shares) {
+  const particles::Particles<Dim>& p = sim.particles();
   Energies e;
   std::vector<double> w = particle_volumes<Dim>(sim.graph(), p.x, volume, &e.filled);
   e.filled /= volume;
@@ -100,8 +100,8 @@ struct Run {
 
 template <int Dim>
 Run run_method(const Method& m, int level, double end, Shares shares = Shares::cell_shares,
-               PicProjection projection = PicProjection::volume) {
-  PicOptions<Dim> o;
+               pic::PicProjection projection = pic::PicProjection::volume) {
+  pic::PicOptions<Dim> o;
   o.projection = projection;
   o.reseed = shares == Shares::cell_shares;
   o.adaptive = m.adaptive;
@@ -109,7 +109,7 @@ Run run_method(const Method& m, int level, double end, Shares shares = Shares::c
   o.finest_level = level;
   o.coarse_level = m.adaptive ? 3 : level;
   if (m.paper) o.apply_paper_preset();
-  AdaptivePic<Dim> sim(o);
+  pic::AdaptivePic<Dim> sim(o);
   sim.seed(levelset::box<Dim>(column<Dim>()));
   const double volume = column<Dim>().size().prod();
   const Energies start = energies(sim, volume, shares);
@@ -123,7 +123,7 @@ Run run_method(const Method& m, int level, double end, Shares shares = Shares::c
   Stopwatch clock;
   while (sim.time() < end - 1e-12) {
     const double dt = std::min(sim.stable_dt(1.0, 0.01), end - sim.time());
-    const PicStepReport step = sim.advance(dt);
+    const pic::PicStepReport step = sim.advance(dt);
     ++run.steps;
     run.projection.add(step);
     const Energies e = energies(sim, volume, shares);
@@ -193,7 +193,7 @@ CaseResult run(const CaseOptions& options) {
             r.projection.largest <= 1e-6,
             fmt::format("{}: the projection on the uniform tree raised the kinetic energy by {:.2e}", key,
                         r.projection.largest));
-      if (m.transfer == PicTransfer::pic || m.transfer == PicTransfer::apic)
+      if (m.transfer == pic::PicTransfer::pic || m.transfer == pic::PicTransfer::apic)
         result.expect(
             r.above_peak <= 5e-3,
             fmt::format("{}: the total energy rose {:.2e} above its earlier peak", key, r.above_peak));
@@ -215,16 +215,17 @@ CaseResult run(const CaseOptions& options) {
                "that work summed over the steps it was positive"});
   for (const Method& m : kFlowMethods) {
     if (m.adaptive) continue;
-    for (const PicProjection projection :
-         {PicProjection::volume, PicProjection::mass, PicProjection::split}) {
-      if (projection != PicProjection::volume && m.transfer == PicTransfer::rbf) continue;
+    for (const pic::PicProjection projection :
+         {pic::PicProjection::volume, pic::PicProjection::mass, pic::PicProjection::split}) {
+      if (projection != pic::PicProjection::volume && m.transfer == pic::PicTransfer::rbf) continue;
       const Run r = run_method<Dim>(m, first, end, Shares::fixed_masses, projection);
       fixed.add_row({std::string(m.name), std::string(to_string(projection)), r.steps, r.kinetic.back(),
                      r.total.back(), r.above_peak, r.rise, r.rise_from, r.rise_to, r.volume.back(),
                      r.beyond_work, r.work_up});
-      const std::string key = fmt::format(
-          "{} L{} fixed masses{}", m.name, first,
-          projection == PicProjection::volume ? "" : fmt::format(", {} projection", to_string(projection)));
+      const std::string key = fmt::format("{} L{} fixed masses{}", m.name, first,
+                                          projection == pic::PicProjection::volume
+                                              ? ""
+                                              : fmt::format(", {} projection", to_string(projection)));
       result.gate.push_back({key + " largest rise of the total energy", GateFigure::Kind::error, r.rise});
       result.gate.push_back({key + " energy lost by the end", GateFigure::Kind::error, 1.0 - r.total.back()});
       // PIC's transfers average (p -> face) and interpolate (face -> p) with weights that sum to 1, so
@@ -242,7 +243,7 @@ CaseResult run(const CaseOptions& options) {
       const std::string rose =
           fmt::format("{}: the total energy rose by {:.2e} E(0) from t = {:.2f} to {:.2f} s", key, r.rise,
                       r.rise_from, r.rise_to);
-      if (projection == PicProjection::mass && m.transfer != PicTransfer::flip)
+      if (projection == pic::PicProjection::mass && m.transfer != pic::PicTransfer::flip)
         result.expect(r.rise <= 1e-9, rose);
       else if (r.rise > 1e-6)
         result.warnings.push_back(rose);
@@ -260,7 +261,7 @@ CaseResult run(const CaseOptions& options) {
       const std::string beyond = fmt::format(
           "{}: a step raised E by {:.2e} E(0) more than the pressure's work in the particles' masses", key,
           r.beyond_work);
-      if (m.transfer == PicTransfer::pic)
+      if (m.transfer == pic::PicTransfer::pic)
         result.expect(r.beyond_work <= 1e-9, beyond);
       else if (r.beyond_work > 1e-9)
         result.warnings.push_back(beyond);

@@ -40,12 +40,12 @@ constexpr double kDepth = 0.3, kGravity = 9.81;
 struct Method {
   const char* name;
   bool adaptive;
-  PicTransfer transfer;
+  pic::PicTransfer transfer;
   bool paper;
 };
-const Method kMethods[] = {{"adaptive-rbf", true, PicTransfer::rbf, false},
-                           {"adaptive-rbf-paper", true, PicTransfer::rbf, true},
-                           {"regular-apic", false, PicTransfer::apic, false}};
+const Method kMethods[] = {{"adaptive-rbf", true, pic::PicTransfer::rbf, false},
+                           {"adaptive-rbf-paper", true, pic::PicTransfer::rbf, true},
+                           {"regular-apic", false, pic::PicTransfer::apic, false}};
 
 struct Tank {
   const char* name;
@@ -83,7 +83,7 @@ std::pair<double, double> growth_rate(const std::vector<double>& t, const std::v
 
 template <int Dim>
 Outcome run_pool(const Method& m, const Tank& tank) {
-  PicOptions<Dim> o;
+  pic::PicOptions<Dim> o;
   Vec<Dim> size = Vec<Dim>::Ones();
   size[0] = tank.length;
   o.domain = Box<Dim>{Vec<Dim>::Zero(), size};
@@ -91,9 +91,9 @@ Outcome run_pool(const Method& m, const Tank& tank) {
   o.transfer = m.transfer;
   o.finest_level = tank.finest;
   o.coarse_level = m.adaptive ? tank.finest - 2 : tank.finest;
-  o.solver.kind = default_ppe_solver(m.adaptive, Dim);  // as a scene file would
+  o.solver.kind = scene::default_ppe_solver(m.adaptive, Dim);  // as a scene file would
   if (m.paper) o.apply_paper_preset();
-  AdaptivePic<Dim> sim(o);
+  pic::AdaptivePic<Dim> sim(o);
   Vec<Dim> hi = size;
   hi[1] = kDepth;
   sim.seed(levelset::box<Dim>({Vec<Dim>::Zero(), hi}));

@@ -33,19 +33,19 @@ struct Mean {
 /// One run of the scene to `end` through the liquid program's own SceneRunner (as `liquid run
 /// quad-dam-break-2d --method rbf|apic --solver NAME --until END` runs it, writing nothing).
 Mean run_scene(bool adaptive, SolverKind kind, double end) {
-  const std::string path = find_scene("quad-dam-break-2d");
-  Scene<2> scene = load_scene<2>(path);
-  SceneOverrides o;
+  const std::string path = scene::find_scene("quad-dam-break-2d");
+  scene::Scene<2> scene = scene::load_scene<2>(path);
+  scene::SceneOverrides o;
   o.method = adaptive ? "rbf" : "apic";
   o.adaptive = adaptive ? 1 : 0;
   o.paper = adaptive;  // the paper's claim, so the paper's transfer and reseeding
   o.solver = linalg::to_string(kind);
   o.until = end;
-  apply_overrides<2>(o, scene);
-  RunSettings settings;
+  scene::apply_overrides<2>(o, scene);
+  scene::RunSettings settings;
   settings.overrides = o;
   settings.scene_path = path;
-  SceneRunner<2> run(std::move(scene), settings);
+  scene::SceneRunner<2> run(std::move(scene), settings);
   Mean m;
   while (!run.done()) {
     const linalg::SolveStats& ppe = run.step().ppe;
@@ -64,7 +64,8 @@ Mean run_scene(bool adaptive, SolverKind kind, double end) {
 
 CaseResult run(const CaseOptions& options) {
   CaseResult result;
-  const double end = options.full ? load_scene<2>(find_scene("quad-dam-break-2d")).time.end : 0.25;
+  const double end =
+      options.full ? scene::load_scene<2>(scene::find_scene("quad-dam-break-2d")).time.end : 0.25;
   Table runs(fmt::format("quad-dam-break-2d to t = {} s, per step (mean)", end),
              {"tree", "solver", "steps", "unknowns", "iterations", "setup s", "solve s", "hierarchy kept"});
   Table paper(

@@ -34,30 +34,30 @@ namespace {
 constexpr long kSteps = 6;
 
 template <int Dim>
-double fluid_volume(const AdaptivePic<Dim>& sim) {
+double fluid_volume(const pic::AdaptivePic<Dim>& sim) {
   return pic::volume_of<Dim>(sim.graph(), sim.classification().fluid);
 }
 
 /// The volume of one layer of surface cells: what a moving surface can add to or take from the
 /// cell-counted volume without any liquid being lost.
 template <int Dim>
-double surface_volume(const AdaptivePic<Dim>& sim) {
+double surface_volume(const pic::AdaptivePic<Dim>& sim) {
   return pic::volume_of<Dim>(sim.graph(), sim.classification().surface);
 }
 
 template <int Dim>
 void smoke(const std::string& name, const std::string& method, Table& table, CaseResult& result,
            const std::string& surface = "") {
-  const std::string path = find_scene(name);
-  Scene<Dim> scene = load_scene<Dim>(path);
-  SceneOverrides o;
+  const std::string path = scene::find_scene(name);
+  scene::Scene<Dim> scene = scene::load_scene<Dim>(path);
+  scene::SceneOverrides o;
   o.finest = Dim == 2 ? 5 : 3;
   o.steps = kSteps;
   o.method = method;
   o.surface = surface;
   const std::string label = surface.empty() ? method : method + "-" + surface;
-  apply_overrides<Dim>(o, scene);
-  RunSettings settings;
+  scene::apply_overrides<Dim>(o, scene);
+  scene::RunSettings settings;
   settings.out =
       (std::filesystem::temp_directory_path() / "liquid-scene-smoke" / (name + "-" + label)).string();
   std::filesystem::remove_all(settings.out);
@@ -67,7 +67,7 @@ void smoke(const std::string& name, const std::string& method, Table& table, Cas
   const bool adaptive = scene.pic.adaptive;
   const std::string key = fmt::format("{} {}", name, label);
   try {
-    SceneRunner<Dim> run(std::move(scene), settings);
+    scene::SceneRunner<Dim> run(std::move(scene), settings);
     const double v0 = fluid_volume(run.solver());
     double layer = surface_volume(run.solver()) / v0;
     const long n0 = run.solver().particles().size();
@@ -75,7 +75,7 @@ void smoke(const std::string& name, const std::string& method, Table& table, Cas
     const double change = fluid_volume(run.solver()) / v0 - 1.0;
     layer = std::max(layer, surface_volume(run.solver()) / v0);
     const long n1 = run.solver().particles().size();
-    const RunSummary s = run.summary();
+    const scene::RunSummary s = run.summary();
     int timed = 0, expected = 0;
     for (const char* phase : {"sources", "classify", "grid", "p2g", "forces", "laplacian", "ppe", "project",
                               "extrapolate", "g2p", "advect", "reseed", "total"}) {
@@ -107,16 +107,16 @@ void smoke(const std::string& name, const std::string& method, Table& table, Cas
 
 template <int Dim>
 void smoke_sph(const std::string& name, Table& table, CaseResult& result) {
-  const std::string path = find_scene(name);
-  Scene<Dim> scene = load_scene<Dim>(path);
-  SceneOverrides o;
+  const std::string path = scene::find_scene(name);
+  scene::Scene<Dim> scene = scene::load_scene<Dim>(path);
+  scene::SceneOverrides o;
   o.steps = kSteps;
   if (scene.sph)
     o.spacing = Dim == 2 ? 0.02 : 0.05;
   else
     o.method = "sph", o.finest = 5;
-  apply_overrides<Dim>(o, scene);
-  RunSettings settings;
+  scene::apply_overrides<Dim>(o, scene);
+  scene::RunSettings settings;
   settings.out = (std::filesystem::temp_directory_path() / "liquid-scene-smoke" / (name + "-sph")).string();
   std::filesystem::remove_all(settings.out);
   settings.overrides = o;
@@ -127,11 +127,11 @@ void smoke_sph(const std::string& name, Table& table, CaseResult& result) {
     return sim.particles().total_mass() / sim.sizes().mass;
   };
   try {
-    SphSceneRunner<Dim> run(std::move(scene), settings);
+    scene::SphSceneRunner<Dim> run(std::move(scene), settings);
     const double m0 = level0(run.solver());
     const long n0 = run.solver().particles().size();
     while (!run.done()) run.step();
-    const SphRunSummary s = run.summary();
+    const scene::SphRunSummary s = run.summary();
     const double change = (level0(run.solver()) - static_cast<double>(s.emitted)) / m0 - 1.0;
     const auto& e = run.solver().timer().entries();
     const auto calls = [&](const char* phase) {
@@ -171,9 +171,10 @@ CaseResult run(const CaseOptions&) {
   Table table("every built-in scene, 6 steps at coarse levels",
               {"dim", "scene", "method", "steps", "t", "particles at start", "particles at end",
                "volume change", "surface layer", "phases timed", "of", "frames", "s/step"});
-  for (const auto& [name, description] : builtin_scenes()) {
-    const bool two = scene_dimension(find_scene(name)) == 2;
-    const bool sph = two ? load_scene<2>(find_scene(name)).sph : load_scene<3>(find_scene(name)).sph;
+  for (const auto& [name, description] : scene::builtin_scenes()) {
+    const bool two = scene::scene_dimension(scene::find_scene(name)) == 2;
+    const bool sph = two ? scene::load_scene<2>(scene::find_scene(name)).sph
+                         : scene::load_scene<3>(scene::find_scene(name)).sph;
     if (sph) {
       if (two)
         smoke_sph<2>(name, table, result);

@@ -54,13 +54,13 @@ struct Row {
 
 /// The largest Lebesgue constant of the face -> particle stencils of the tree's cells.
 template <int Dim>
-double largest_lebesgue(const CellGraph<Dim>& graph, const TransferOptions& options) {
+double largest_lebesgue(const tree::CellGraph<Dim>& graph, const transfer::TransferOptions& options) {
   rbf::InterpolantCache<Dim> cache;
   const rbf::Config config = options.rbf_config();
   const std::vector<double> zero(graph.face_capacity(), 0.0);
   transfer::FaceStencil<Dim> stencil;
   double largest = 0.0;
-  graph.for_each_cell([&](CellId c) {
+  graph.for_each_cell([&](tree::CellId c) {
     transfer::gather_face_stencil<Dim>(graph, c, options.rings, zero, {}, stencil);
     for (int axis = 0; axis < Dim; ++axis) {
       if (stencil.nodes[axis].empty()) continue;
@@ -73,7 +73,7 @@ double largest_lebesgue(const CellGraph<Dim>& graph, const TransferOptions& opti
 }
 
 template <int Dim>
-double particle_error(const AdaptivePic<Dim>& sim) {
+double particle_error(const pic::AdaptivePic<Dim>& sim) {
   double e = 0.0;
   for (int i = 0; i < sim.particles().size(); ++i)
     e = std::max(
@@ -82,13 +82,13 @@ double particle_error(const AdaptivePic<Dim>& sim) {
 }
 
 template <int Dim>
-double particle_energy(const AdaptivePic<Dim>& sim) {
+double particle_energy(const pic::AdaptivePic<Dim>& sim) {
   return twice_kinetic_energy<Dim>(sim, std::pow(M_PI, Dim));
 }
 
 template <int Dim>
 Row run_row(bool adaptive, const Transfer& t, int level, int steps) {
-  PicOptions<Dim> o;
+  pic::PicOptions<Dim> o;
   o.domain = Box<Dim>{Vec<Dim>::Zero(), Vec<Dim>::Constant(M_PI)};
   o.gravity = Vec<Dim>::Zero();
   o.adaptive = adaptive;
@@ -99,7 +99,7 @@ Row run_row(bool adaptive, const Transfer& t, int level, int steps) {
   o.reseed = false;
   o.rbf.exponent = t.exponent;
   o.rbf.degree = t.degree;
-  AdaptivePic<Dim> sim(o);
+  pic::AdaptivePic<Dim> sim(o);
   sim.seed([](const Vec<Dim>&) { return -1.0; }, exact<Dim>);
   const double e0 = particle_energy(sim);
   Row row;
@@ -108,7 +108,7 @@ Row run_row(bool adaptive, const Transfer& t, int level, int steps) {
   row.lebesgue = largest_lebesgue<Dim>(sim.graph(), o.rbf);
   Stopwatch clock;
   for (int s = 0; s < steps; ++s) {
-    const PicStepReport r = sim.advance(1e-4);
+    const pic::PicStepReport r = sim.advance(1e-4);
     LIQUID_VERIFY(r.ppe.converged(), "transfer-stability: the PPE did not converge at step {}: {}", s + 1,
                   r.ppe.describe());
     if (s == 0) row.error_first = particle_error(sim);
@@ -117,8 +117,8 @@ Row run_row(bool adaptive, const Transfer& t, int level, int steps) {
   row.seconds = clock.seconds();
   row.error_last = particle_error(sim);
   row.energy = particle_energy(sim) / e0;
-  const CellGraph<Dim>& g = sim.graph();
-  g.for_each_face([&](FaceId f) {
+  const tree::CellGraph<Dim>& g = sim.graph();
+  g.for_each_face([&](tree::FaceId f) {
     row.face_error = std::max(
         row.face_error, std::abs(sim.face_velocity()[f] - exact<Dim>(g.face_centre(f))[g.face(f).axis]));
   });

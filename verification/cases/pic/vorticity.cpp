@@ -149,7 +149,7 @@ Sampled sample(const F& velocity) {
 
 /// Twice the kinetic energy of the box's liquid, from the particles.
 template <int Dim>
-double mean_square_speed(const AdaptivePic<Dim>& sim) {
+double mean_square_speed(const pic::AdaptivePic<Dim>& sim) {
   return twice_kinetic_energy<Dim>(sim, std::pow(M_PI, Dim));
 }
 
@@ -210,7 +210,7 @@ double seconds_at_error(const std::vector<Run>& runs, double target, Reach& how)
 
 template <int Dim>
 Run run_method(const Method& m, int level) {
-  PicOptions<Dim> o;
+  pic::PicOptions<Dim> o;
   o.domain = Box<Dim>{Vec<Dim>::Zero(), Vec<Dim>::Constant(M_PI)};
   o.gravity = Vec<Dim>::Zero();
   o.adaptive = m.adaptive;
@@ -219,7 +219,7 @@ Run run_method(const Method& m, int level) {
   o.coarse_level = m.adaptive ? level - 1 : level;
   if (m.adaptive) o.refine = levelset::box<Dim>(refined_region<Dim>());
   if (m.paper) o.apply_paper_preset();
-  AdaptivePic<Dim> sim(o);
+  pic::AdaptivePic<Dim> sim(o);
   sim.seed([](const Vec<Dim>&) { return -1.0; }, exact<Dim>);
   const double e0 = mean_square_speed(sim);
   const double z0 = sample<Dim>(exact<Dim>).enstrophy;
@@ -230,7 +230,7 @@ Run run_method(const Method& m, int level) {
   double lowest = 1.0;
   while (next < 3) {
     const double dt = std::min(sim.stable_dt(1.0, 1.0), marks[next] - sim.time());
-    const PicStepReport r = sim.advance(dt);
+    const pic::PicStepReport r = sim.advance(dt);
     ++run.steps;
     run.projection.add(r);
     run.particles += static_cast<double>(r.n_particles);
@@ -240,7 +240,8 @@ Run run_method(const Method& m, int level) {
     run.energy_rise = std::max(run.energy_rise, e - lowest);
     lowest = std::min(lowest, e);
     if (sim.time() >= marks[next] - 1e-9) {
-      const FaceVelocityField<Dim> field(sim.graph(), sim.face_velocity(), {}, TransferOptions::paper_rbf());
+      const transfer::FaceVelocityField<Dim> field(sim.graph(), sim.face_velocity(), {},
+                                                   transfer::TransferOptions::paper_rbf());
       const Sampled s = sample<Dim>([&](const Vec<Dim>& x) { return field(x); });
       run.at[next] = {
           e, s.enstrophy / z0, s.error, s.error_inside, s.error_outside, s.rms_inside, s.rms_outside};
@@ -310,7 +311,7 @@ CaseResult run(const CaseOptions& options) {
             r.projection.largest <= 1e-6,
             fmt::format("{}: the projection on the uniform tree raised the kinetic energy by {:.2e}", key,
                         r.projection.largest));
-      if (m.transfer == PicTransfer::pic || m.transfer == PicTransfer::apic)
+      if (m.transfer == pic::PicTransfer::pic || m.transfer == pic::PicTransfer::apic)
         result.expect(
             r.max_energy_gain <= 5e-3,
             fmt::format("{}: the particles' kinetic energy grew by {:.2e}", key, r.max_energy_gain));

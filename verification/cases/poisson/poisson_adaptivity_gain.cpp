@@ -55,7 +55,7 @@ void study(const CaseOptions& options, Table& table, CaseResult& result, Json& s
   s.max_cells = options.max_cells;
   const Box<Dim> domain = s.domain;
   const double band_cells = half_width / (2.0 / std::ldexp(1.0, first_fine));
-  s.make_tree = [domain, radius, band_cells](int level, const CellGraphOptions<Dim>& o) {
+  s.make_tree = [domain, radius, band_cells](int level, const tree::CellGraphOptions<Dim>& o) {
     const auto circle = levelset::sphere<Dim>(Vec<Dim>::Zero(), radius);
     return tree::narrow_band<Dim>(domain, circle, level, level + (Dim == 2 ? 4 : 3), band_cells, o);
   };
@@ -63,9 +63,9 @@ void study(const CaseOptions& options, Table& table, CaseResult& result, Json& s
 
   std::vector<PoissonRun> adaptive = solve_rows<Dim>(s, result, fmt::format("{}D adaptive", Dim));
   std::vector<PoissonRun> uniform;
-  CellGraphOptions<Dim> o;
+  tree::CellGraphOptions<Dim> o;
   for (int level = s.level_min; level <= s.level_max; ++level) {
-    const CellGraph<Dim> flat = tree::uniform<Dim>(domain, level + s.finest_offset, o);
+    const tree::CellGraph<Dim> flat = tree::uniform<Dim>(domain, level + s.finest_offset, o);
     PoissonRun u = solve_poisson<Dim>(flat, s);
     result.expect(u.solve.converged(),
                   fmt::format("{}D uniform level {}: {}", Dim, level + s.finest_offset, u.solve.describe()));

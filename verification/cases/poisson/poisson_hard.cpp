@@ -61,7 +61,7 @@ PoissonStudy<2> dirichlet_circle(double radius) {
 struct Scenario {
   std::string name;
   PoissonStudy<2> study;
-  CellGraph<2> graph;
+  tree::CellGraph<2> graph;
   std::string reference;    // name of the reference scenario ("" for a reference itself)
   std::string graded = {};  // a random tree's graded twin (same seed, jump 1): its ratio is reported
 };
@@ -75,13 +75,13 @@ CaseResult run(const CaseOptions& options) {
   std::vector<Scenario> scenarios;
   {
     // Every cell of the random trees refines the uniform grid of their coarsest level, L - 1.
-    CellGraphOptions<2> o;
+    tree::CellGraphOptions<2> o;
     scenarios.push_back(
         {fmt::format("uniform, level {}", L - 1), neumann(square), tree::uniform<2>(square, L - 1, o), ""});
   }
   for (std::uint64_t seed : {11u, 12u}) {
     for (int jump : {1, 3, 4}) {
-      CellGraphOptions<2> o;
+      tree::CellGraphOptions<2> o;
       o.max_jump = jump;
       scenarios.push_back({fmt::format("random seed {} jump {}", seed, jump), neumann(square),
                            tree::random<2>(square, seed, L - 1, L + 3, 0.35, o),
@@ -91,7 +91,7 @@ CaseResult run(const CaseOptions& options) {
   }
   {
     const auto circle = levelset::sphere<2>(Vec<2>::Constant(0.5 * pi), 0.9);
-    CellGraphOptions<2> graded, jump4;
+    tree::CellGraphOptions<2> graded, jump4;
     graded.max_jump = 1;
     jump4.max_jump = 4;
     scenarios.push_back({"band, graded", neumann(square),
@@ -101,10 +101,10 @@ CaseResult run(const CaseOptions& options) {
   }
   {
     // Put the circle 1e-6 h (and, for reference, 0.37 h) beyond a cell centre near radius 0.9.
-    CellGraphOptions<2> o;
+    tree::CellGraphOptions<2> o;
     const auto base = dirichlet_circle(0.9);
-    CellGraph<2> g = tree::narrow_band<2>(square, base.levelset, L, L + 2, 2.0, o);
-    const CellId c = g.locate(Vec<2>(0.5 * pi + 0.9, 0.5 * pi + 0.013));
+    tree::CellGraph<2> g = tree::narrow_band<2>(square, base.levelset, L, L + 2, 2.0, o);
+    const tree::CellId c = g.locate(Vec<2>(0.5 * pi + 0.9, 0.5 * pi + 0.013));
     const double h = g.cell_size(c).maxCoeff();
     const double r = (g.centre(c) - Vec<2>::Constant(0.5 * pi)).norm();
     scenarios.push_back({"circle 0.37 h from a centre", dirichlet_circle(r + 0.37 * h), g, ""});
@@ -114,7 +114,7 @@ CaseResult run(const CaseOptions& options) {
   {
     const Box<2> flat{Vec<2>::Zero(), Vec<2>(pi, pi / 64)};
     const auto line = levelset::sphere<2>(Vec<2>(0.5 * pi, 0.0), 0.9);
-    CellGraphOptions<2> o;
+    tree::CellGraphOptions<2> o;
     scenarios.push_back({"flat cells, uniform", neumann_x(flat), tree::uniform<2>(flat, L, o), ""});
     scenarios.push_back({"flat cells, nearly collinear stencils", neumann_x(flat),
                          tree::narrow_band<2>(flat, line, L, L + 2, 2.0, o), "flat cells, uniform"});

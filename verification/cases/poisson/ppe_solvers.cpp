@@ -125,7 +125,7 @@ struct Key {
 using Results = std::map<Key, std::vector<std::pair<int, Solved>>>;  // by row level
 
 template <int Dim>
-void solve_tree(const std::string& name, const PoissonStudy<Dim>& study, const CellGraph<Dim>& graph,
+void solve_tree(const std::string& name, const PoissonStudy<Dim>& study, const tree::CellGraph<Dim>& graph,
                 const std::string& tree, int level, bool full, Table& table, Results& results) {
   Stopwatch assembly;
   const mac::PoissonSystem<Dim> system =
@@ -158,17 +158,18 @@ template <int Dim>
 void run_study(const std::string& name, PoissonStudy<Dim> study, int level_min, int level_max, bool uniform,
                bool full, Table& table, Results& results) {
   study.level_min = level_min;
-  CellGraphOptions<Dim> options;
+  tree::CellGraphOptions<Dim> options;
   options.max_jump = study.max_jump;
-  const CellGraph<Dim> first = study.make_tree(level_min, options);
+  const tree::CellGraph<Dim> first = study.make_tree(level_min, options);
   // Full tier: the 2D uniform grid of 1M cells (the finest Neumann row's h), 3D up to 300k.
   const long uniform_limit = full ? (Dim == 2 ? 1100000 : 300000) : 70000;
   for (int level = level_min; level <= level_max; ++level) {
-    const CellGraph<Dim> graph = level == level_min ? first : row_tree<Dim>(study, first, level, options);
+    const tree::CellGraph<Dim> graph =
+        level == level_min ? first : row_tree<Dim>(study, first, level, options);
     solve_tree<Dim>(name, study, graph, "adaptive", level, full, table, results);
     const int fine = graph.deepest_level();
     if (uniform && std::ldexp(1.0, Dim * fine) <= double(uniform_limit)) {
-      CellGraphOptions<Dim> flat_options;
+      tree::CellGraphOptions<Dim> flat_options;
       flat_options.max_jump = study.max_jump;
       solve_tree<Dim>(name, study, tree::uniform<Dim>(study.domain, fine, flat_options), "uniform", level,
                       full, table, results);

@@ -45,11 +45,11 @@ namespace {
 
 struct Method {
   const char* name;
-  TransferOptions options;
+  transfer::TransferOptions options;
 };
-const Method kMethods[] = {{"rbf", TransferOptions::paper_rbf()},
-                           {"mls", TransferOptions::cubic_mls()},
-                           {"linear", TransferOptions::linear_fit()}};
+const Method kMethods[] = {{"rbf", transfer::TransferOptions::paper_rbf()},
+                           {"mls", transfer::TransferOptions::cubic_mls()},
+                           {"linear", transfer::TransferOptions::linear_fit()}};
 
 template <int Dim>
 Vec<Dim> field(const Vec<Dim>& x) {
@@ -74,15 +74,15 @@ bool interior(const Vec<Dim>& x) {
 }
 
 template <int Dim>
-CellGraph<Dim> fig4_tree(int extra) {
-  CellGraphOptions<Dim> o;
+tree::CellGraph<Dim> fig4_tree(int extra) {
+  tree::CellGraphOptions<Dim> o;
   o.max_jump = 2;
   const auto base = tree::random<Dim>(fig4_domain<Dim>(), 4, Dim == 2 ? 3 : 2, Dim == 2 ? 5 : 4, 0.4, o);
   return extra == 0 ? base : tree::refined<Dim>(base, extra, o);
 }
 
 template <int Dim>
-double finest_h(const CellGraph<Dim>& g) {
+double finest_h(const tree::CellGraph<Dim>& g) {
   return std::ldexp(g.domain().size().maxCoeff(), -g.deepest_level());
 }
 
@@ -120,13 +120,13 @@ std::vector<Vec<Dim>> grid_points(const Box<Dim>& d, int n) {
 }
 
 template <int Dim>
-Errors reconstruct(const CellGraph<Dim>& g, std::span<const Vec<Dim>> pts, const CellBins& bins,
-                   const Method& m, double& seconds) {
+Errors reconstruct(const tree::CellGraph<Dim>& g, std::span<const Vec<Dim>> pts,
+                   const particles::CellBins& bins, const Method& m, double& seconds) {
   std::vector<double> u(g.face_capacity(), 0.0);
-  g.for_each_face([&](FaceId f) { u[f] = field<Dim>(g.face_centre(f))[g.face(f).axis]; });
+  g.for_each_face([&](tree::FaceId f) { u[f] = field<Dim>(g.face_centre(f))[g.face(f).axis]; });
   std::vector<Vec<Dim>> v(pts.size());
   Stopwatch clock;
-  faces_to_points<Dim>(g, u, {}, pts, bins, m.options, v);
+  transfer::faces_to_points<Dim>(g, u, {}, pts, bins, m.options, v);
   seconds = clock.seconds();
   return compare<Dim>(pts, v);
 }
@@ -140,16 +140,16 @@ void reconstruction(const CaseOptions& options, Table& fig4, Table& conv, Table&
   std::vector<std::vector<double>> e_rec(3), e_trip(3), e_inner(3);
   for (int extra = 0; extra < rows; ++extra) {
     const auto g = fig4_tree<Dim>(extra);
-    CellBins bins;
-    bin_particles<Dim>(g, pts, bins);
-    Particles<Dim> p;
-    SeedOptions so;
+    particles::CellBins bins;
+    particles::bin_particles<Dim>(g, pts, bins);
+    particles::Particles<Dim> p;
+    particles::SeedOptions so;
     so.jitter = 0.5;
-    seed_region<Dim>(
+    particles::seed_region<Dim>(
         g, [](const Vec<Dim>&) { return -1.0; }, so, p);
     for (int i = 0; i < p.size(); ++i) p.v[i] = field<Dim>(p.x[i]);
-    CellBins pbins;
-    bin_particles<Dim>(g, p.x, pbins);
+    particles::CellBins pbins;
+    particles::bin_particles<Dim>(g, p.x, pbins);
     hs.push_back(finest_h(g));
     for (int k = 0; k < 3; ++k) {
       const Method& m = kMethods[k];
@@ -164,10 +164,10 @@ void reconstruction(const CaseOptions& options, Table& fig4, Table& conv, Table&
         result.gate.push_back(
             {fmt::format("{}D fig4 {} linf", Dim, m.name), GateFigure::Kind::error, e.linf});
       }
-      FaceValues faces;
-      particles_to_faces<Dim>(g, p, pbins, m.options, faces);
+      transfer::FaceValues faces;
+      transfer::particles_to_faces<Dim>(g, p, pbins, m.options, faces);
       std::vector<Vec<Dim>> back(p.size());
-      faces_to_points<Dim>(g, faces.value, faces.known, p.x, pbins, m.options, back);
+      transfer::faces_to_points<Dim>(g, faces.value, faces.known, p.x, pbins, m.options, back);
       const Errors t = compare<Dim>(p.x, back);
       e_trip[k].push_back(t.linf);
       e_inner[k].push_back(t.linf_interior);
@@ -217,7 +217,7 @@ void reconstruction(const CaseOptions& options, Table& fig4, Table& conv, Table&
 }
 
 template <int Dim>
-double kinetic(const Particles<Dim>& p) {
+double kinetic(const particles::Particles<Dim>& p) {
   double e = 0.0;
   for (const auto& v : p.v) e += 0.5 * v.squaredNorm();
   return e;
@@ -230,37 +230,38 @@ void energy(const CaseOptions& options, Table& table, CaseResult& result) {
   const Box<Dim> domain{Vec<Dim>::Zero(), Vec<Dim>::Constant(std::numbers::pi)};
   for (int level = first; level <= last; ++level) {
     const auto g = tree::uniform<Dim>(domain, level);
-    const RegularLattice<Dim> lattice(g);
-    Particles<Dim> start;
-    SeedOptions so;
+    const transfer::RegularLattice<Dim> lattice(g);
+    particles::Particles<Dim> start;
+    particles::SeedOptions so;
     so.jitter = 0.5;
-    seed_region<Dim>(
+    particles::seed_region<Dim>(
         g, [](const Vec<Dim>&) { return -1.0; }, so, start);
     for (int i = 0; i < start.size(); ++i) start.v[i] = taylor_green<Dim>(start.x[i]);
     start.add_field("apic", Dim * Dim);
-    CellBins bins;
-    bin_particles<Dim>(g, start.x, bins);
+    particles::CellBins bins;
+    particles::bin_particles<Dim>(g, start.x, bins);
     const double ke0 = kinetic(start);
     std::vector<Table::Cell> row{long(Dim), long(level), long(start.size())};
     double loss[3];
     for (int method = 0; method < 3; ++method) {  // rbf, pic, apic
-      Particles<Dim> p = start;
-      FaceValues faces;
+      particles::Particles<Dim> p = start;
+      transfer::FaceValues faces;
       for (int k = 0; k < pairs; ++k) {
         if (method == 0) {
-          particles_to_faces<Dim>(g, p, bins, TransferOptions::paper_rbf(), faces);
-          faces_to_points<Dim>(g, faces.value, faces.known, p.x, bins, TransferOptions::paper_rbf(), p.v);
+          transfer::particles_to_faces<Dim>(g, p, bins, transfer::TransferOptions::paper_rbf(), faces);
+          transfer::faces_to_points<Dim>(g, faces.value, faces.known, p.x, bins,
+                                         transfer::TransferOptions::paper_rbf(), p.v);
         } else {
-          const auto scheme = method == 1 ? RegularScheme::pic : RegularScheme::apic;
-          linear_to_faces<Dim>(g, lattice, p, bins, scheme, {}, faces);
-          linear_to_points<Dim>(lattice, faces.value, p.x, p.v,
-                                method == 2 ? p.field(p.field_index("apic")) : std::span<double>{});
+          const auto scheme = method == 1 ? transfer::RegularScheme::pic : transfer::RegularScheme::apic;
+          transfer::linear_to_faces<Dim>(g, lattice, p, bins, scheme, {}, faces);
+          transfer::linear_to_points<Dim>(lattice, faces.value, p.x, p.v,
+                                          method == 2 ? p.field(p.field_index("apic")) : std::span<double>{});
         }
       }
       // APIC's energy counts its affine part (zero at the start: C = 0).
-      const double ke =
-          kinetic(p) +
-          (method == 2 ? particle_affine_energy<Dim>(lattice, p, p.field(p.field_index("apic"))) : 0.0);
+      const double ke = kinetic(p) + (method == 2 ? transfer::particle_affine_energy<Dim>(
+                                                        lattice, p, p.field(p.field_index("apic")))
+                                                  : 0.0);
       loss[method] = 1.0 - std::pow(ke / ke0, 1.0 / pairs);
       row.push_back(loss[method]);
     }

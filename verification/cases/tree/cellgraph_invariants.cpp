@@ -40,12 +40,12 @@ struct Row {
 };
 
 template <int Dim>
-void measure(const CellGraph<Dim>& g, Row& row) {
+void measure(const tree::CellGraph<Dim>& g, Row& row) {
   row.n_leaves = g.n_cells();
   row.n_faces = g.n_faces();
   row.n_hanging = row.n_boundary = 0;
-  g.for_each_face([&](FaceId f) {
-    const GraphFace& face = g.face(f);
+  g.for_each_face([&](tree::FaceId f) {
+    const tree::GraphFace& face = g.face(f);
     if (face.is_boundary()) {
       ++row.n_boundary;
       return;
@@ -56,8 +56,8 @@ void measure(const CellGraph<Dim>& g, Row& row) {
 }
 
 template <int Dim>
-void check(const CellGraph<Dim>& g, Row& row, const std::string& when) {
-  const InvariantReport r = g.check_invariants();
+void check(const tree::CellGraph<Dim>& g, Row& row, const std::string& when) {
+  const tree::InvariantReport r = g.check_invariants();
   if (r.ok()) return;
   row.n_failures += r.n_failures;
   if (row.first_failure.empty()) row.first_failure = when + ": " + r.text(3);
@@ -66,12 +66,12 @@ void check(const CellGraph<Dim>& g, Row& row, const std::string& when) {
 /// Writes the tree with, per cell, the number of faces that cover only part of one of its sides
 /// (its T-junctions); returns the .xmf path.
 template <int Dim>
-std::string write(const CellGraph<Dim>& g, const std::string& dir, const std::string& jump_name) {
+std::string write(const tree::CellGraph<Dim>& g, const std::string& dir, const std::string& jump_name) {
   std::vector<double> hanging(static_cast<std::size_t>(g.cell_capacity()), 0.0);
-  g.for_each_face([&](FaceId f) {
-    const GraphFace& face = g.face(f);
+  g.for_each_face([&](tree::FaceId f) {
+    const tree::GraphFace& face = g.face(f);
     for (int s = 0; s < 2; ++s)
-      if (face.cell[s] != no_cell && face.hanging(s)) hanging[face.cell[s]] += 1.0;
+      if (face.cell[s] != tree::no_cell && face.hanging(s)) hanging[face.cell[s]] += 1.0;
   });
   const io::CellField fields[] = {{"hanging_faces", hanging}};
   return io::write_tree<Dim>(fmt::format("{}/cellgraph-{}d-jump{}", dir, Dim, jump_name), g, fields).xmf;
@@ -80,28 +80,30 @@ std::string write(const CellGraph<Dim>& g, const std::string& dir, const std::st
 template <int Dim>
 Row run_one(int jump, int first_level, int last_level, int n_steps, std::uint64_t seed,
             const std::optional<std::string>& trees_dir, std::vector<std::string>& written) {
-  CellGraphOptions<Dim> options;
+  tree::CellGraphOptions<Dim> options;
   options.max_jump = jump;
   options.max_level = last_level + 1;
   Box<Dim> domain;
   domain.hi[0] = 2.0;  // anisotropic cells
-  CellGraph<Dim> g = tree::random<Dim>(domain, seed, first_level, last_level, Dim == 2 ? 0.5 : 0.3, options);
+  tree::CellGraph<Dim> g =
+      tree::random<Dim>(domain, seed, first_level, last_level, Dim == 2 ? 0.5 : 0.3, options);
   Row row;
   check(g, row, "after the build");
   measure(g, row);
   if (trees_dir)
-    written.push_back(write(g, *trees_dir, jump == unlimited_jump ? "unlimited" : std::to_string(jump)));
+    written.push_back(
+        write(g, *trees_dir, jump == tree::unlimited_jump ? "unlimited" : std::to_string(jump)));
   const Row built = row;
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> u(0.0, 1.0);
-  std::vector<Mark> marks;
+  std::vector<tree::Mark> marks;
   for (int step = 0; step < n_steps; ++step) {
-    marks.assign(g.cell_capacity(), Mark::keep);
-    g.for_each_cell([&](CellId c) {
+    marks.assign(g.cell_capacity(), tree::Mark::keep);
+    g.for_each_cell([&](tree::CellId c) {
       const double r = u(rng);
-      marks[c] = r < 0.03 ? Mark::split : (r < 0.53 ? Mark::merge : Mark::keep);
+      marks[c] = r < 0.03 ? tree::Mark::split : (r < 0.53 ? tree::Mark::merge : tree::Mark::keep);
     });
-    const AdaptReport report = g.adapt(marks);
+    const tree::AdaptReport report = g.adapt(marks);
     row.n_split += report.n_split;
     row.n_merged += report.n_merged;
     check(g, row, fmt::format("after adapt step {}", step + 1));
@@ -120,11 +122,11 @@ Row run_one(int jump, int first_level, int last_level, int n_steps, std::uint64_
 
 CaseResult run(const CaseOptions& options) {
   CaseResult result;
-  std::vector<int> jumps{1, 2, 3, 4, unlimited_jump};
+  std::vector<int> jumps{1, 2, 3, 4, tree::unlimited_jump};
   if (options.max_jump) {
     const int k = *options.max_jump;
     LIQUID_VERIFY(k >= 0, "cellgraph-invariants: --max-jump must be non-negative (got {})", k);
-    jumps = {k == 0 || k >= 64 ? unlimited_jump : k};
+    jumps = {k == 0 || k >= 64 ? tree::unlimited_jump : k};
   }
   const int first = options.levels ? options.levels->first : 2;
   const int last = options.levels ? options.levels->last : 7;
@@ -148,7 +150,7 @@ CaseResult run(const CaseOptions& options) {
       const Row row = dim == 2 ? run_one<2>(jump, first, last, n_steps, seed, options.trees_dir, written)
                                : run_one<3>(jump, std::max(0, first), std::max(first + 1, last - 2), n_steps,
                                             seed, options.trees_dir, written);
-      const std::string jump_name = jump == unlimited_jump ? "unlimited" : std::to_string(jump);
+      const std::string jump_name = jump == tree::unlimited_jump ? "unlimited" : std::to_string(jump);
       table.add_row({long{dim}, jump_name, long{row.n_leaves}, long{row.n_faces}, long{row.n_hanging},
                      long{row.n_boundary}, long{row.worst_jump}, long{row.n_steps}, row.n_split, row.n_merged,
                      row.n_failures});

@@ -1,0 +1,212 @@
+// Case dam-break-convergence: the dam break's front and surface against a finer run, and what each
+// method pays for its error (speed at equal error where adaptivity should pay).
+//
+// Problem. The dam-break scenes' column ([0, 0.4] x [0, 0.6], x [0, 1] in 3D) collapses in a closed
+// unit tank under g = 9.81, dt = min(0.01, CFL 1). Methods: adaptive-rbf (the default transfer and
+// reseeding; band at the finest level, interior three levels coarser), regular-apic and
+// regular-flip on the uniform grid of the same finest h. Rows: finest levels 4, 5 and 6 in 2D (quick
+// tier); 3D at finest 4, 5 and 6 (full tier, dam-break-convergence-3d).
+// Exact solution: none. The reference is the default adaptive run one level finer than the finest
+// row (level 7), the best-resolved solution this machine can afford.
+// Measured at t = 0.05, 0.1, 0.15 (the front runs across the tank) and 0.3 s: the front (the largest x of the
+// particles, the 99.5th percentile so that a lone spray particle does not count) and the surface's height
+// profile (over 16 columns across the tank, the 99th percentile of the particles' heights in each). Error of
+// a run: the largest, over the four times, of |front - reference front| and the L-inf distance of its height
+// profile from the reference's, in units of the column's height. Seconds: the run's wall time to 0.3 s.
+// Expected (asserted): every method's error falls from the coarsest row to the finest (it converges
+// towards the reference). Reported: each method's error against seconds (plotted in the report),
+// and the adaptive run's speed at equal error against the fastest regular method (interpolated in
+// log-log between its rows). Gated: the error of every method and row.
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <fmt/format.h>
+
+#include "common/case.hpp"
+#include "common/fit.hpp"
+#include "liquid/core/timer.hpp"
+#include "liquid/pic/adaptive_pic.hpp"
+#include "liquid/scene/scene.hpp"
+#include "studies/flow_measures.hpp"
+
+namespace liquid::verification {
+namespace {
+
+constexpr double kTimes[] = {0.05, 0.1, 0.15, 0.3};
+constexpr int kColumns = 16;
+constexpr double kHeight = 0.6;  ///< the column's height
+
+const FlowMethod kMethods[] = {{"adaptive-rbf", true, pic::PicTransfer::rbf},
+                               {"regular-apic", false, pic::PicTransfer::apic},
+                               {"regular-flip", false, pic::PicTransfer::flip}};
+
+/// The front and the height profile at one instant.
+struct Shape {
+  double front = 0.0;
+  std::array<double, kColumns> height{};
+};
+
+struct Run {
+  std::vector<Shape> at;  ///< at kTimes
+  double seconds = 0.0;
+  long steps = 0;
+  double particles = 0.0;  ///< average over the steps
+};
+
+double percentile(std::vector<double> v, double q) {
+  if (v.empty()) return 0.0;
+  const std::size_t k = std::min(v.size() - 1, static_cast<std::size_t>(q * static_cast<double>(v.size())));
+  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(k), v.end());
+  return v[k];
+}
+
+template <int Dim>
+Shape measure(const pic::AdaptivePic<Dim>& sim) {
+  Shape s;
+  std::vector<double> xs;
+  std::array<std::vector<double>, kColumns> ys;
+  for (const auto& x : sim.particles().x) {
+    xs.push_back(x[0]);
+    const int c = std::clamp(static_cast<int>(x[0] * kColumns), 0, kColumns - 1);
+    ys[c].push_back(x[1]);
+  }
+  s.front = percentile(xs, 0.995);
+  for (int c = 0; c < kColumns; ++c) s.height[c] = percentile(ys[c], 0.99);
+  return s;
+}
+
+template <int Dim>
+Run run_method(const FlowMethod& m, int level) {
+  pic::PicOptions<Dim> o;
+  o.adaptive = m.adaptive;
+  o.transfer = m.transfer;
+  o.finest_level = level;
+  o.coarse_level = m.adaptive ? std::max(1, level - 3) : level;
+  o.solver.kind = scene::default_ppe_solver(m.adaptive, Dim);  // as a scene file would
+  if (m.paper) o.apply_paper_preset();
+  pic::AdaptivePic<Dim> sim(o);
+  Vec<Dim> hi = Vec<Dim>::Ones();
+  hi[0] = 0.4, hi[1] = kHeight;
+  sim.seed(levelset::box<Dim>({Vec<Dim>::Zero(), hi}));
+  Run run;
+  Stopwatch clock;
+  for (double t : kTimes) {
+    while (sim.time() < t - 1e-12) {
+      const double dt = std::min(sim.stable_dt(1.0, 0.01), t - sim.time());
+      run.particles += static_cast<double>(sim.advance(dt).n_particles);
+      ++run.steps;
+    }
+    run.at.push_back(measure<Dim>(sim));
+  }
+  run.seconds = clock.seconds();
+  run.particles /= static_cast<double>(std::max(1L, run.steps));
+  return run;
+}
+
+/// The largest distance of a run from the reference over the instants, in column heights.
+double error(const Run& r, const Run& ref) {
+  double e = 0.0;
+  for (std::size_t k = 0; k < r.at.size(); ++k) {
+    e = std::max(e, std::abs(r.at[k].front - ref.at[k].front) / kHeight);
+    for (int c = 0; c < kColumns; ++c)
+      e = std::max(e, std::abs(r.at[k].height[c] - ref.at[k].height[c]) / kHeight);
+  }
+  return e;
+}
+
+/// Seconds a method's rows need to reach `target`, log-log between the two rows around it; NaN when
+/// its rows do not bracket the target.
+double seconds_at(const std::vector<double>& errors, const std::vector<double>& seconds, double target) {
+  for (std::size_t i = 0; i + 1 < errors.size(); ++i) {
+    const double e0 = errors[i], e1 = errors[i + 1];
+    if ((e0 - target) * (e1 - target) > 0.0 || e0 == e1 || e0 <= 0.0 || e1 <= 0.0) continue;
+    const double f = std::log(target / e0) / std::log(e1 / e0);
+    return std::exp(std::log(seconds[i]) + f * (std::log(seconds[i + 1]) - std::log(seconds[i])));
+  }
+  return NAN;
+}
+
+template <int Dim>
+CaseResult run(const CaseOptions& options) {
+  CaseResult result;
+  const std::vector<int> levels = Dim == 2 ? std::vector<int>{4, 5, 6} : std::vector<int>{4, 5, 6};
+  (void)options;
+  const int ref_level = levels.back() + 1;
+  const Run reference = run_method<Dim>(kMethods[0], ref_level);
+  result.notes.push_back(fmt::format("reference: adaptive-rbf at finest level {}, {:.1f} s, {:.0f} particles",
+                                     ref_level, reference.seconds, reference.particles));
+  Table table(fmt::format("dam break ({}D): distance from the reference (front and surface heights, in "
+                          "column heights) against seconds to 0.3 s",
+                          Dim),
+              {"method", "finest", "steps", "particles", "error", "seconds", "front at 0.3 s", "reference"});
+  Json series = Json::array();
+  std::map<std::string, std::pair<std::vector<double>, std::vector<double>>> curves;  // errors, seconds
+  const char* name = Dim == 2 ? "dam-break-convergence" : "dam-break-convergence-3d";
+  for (const FlowMethod& m : kMethods) {
+    std::vector<double> errors, seconds, hs;
+    for (int level : levels) {
+      const Run r = run_method<Dim>(m, level);
+      const double e = error(r, reference);
+      table.add_row({std::string(m.name), long(level), r.steps, r.particles, e, r.seconds, r.at.back().front,
+                     reference.at.back().front});
+      errors.push_back(e), seconds.push_back(r.seconds), hs.push_back(std::ldexp(1.0, -level));
+      result.gate.push_back(
+          {fmt::format("{} L{} error", m.name, level), GateFigure::Kind::error, std::max(e, 1e-6)});
+    }
+    result.expect(errors.back() < errors.front(),
+                  fmt::format("{}: the error did not fall from level {} ({:.3g}) to level {} ({:.3g})",
+                              m.name, levels.front(), errors.front(), levels.back(), errors.back()));
+    series.push(
+        series_entry(fmt::format("{}: distance from the reference against h", name), m.name, hs, errors));
+    series.push(series_entry(fmt::format("{}: seconds against the distance from the reference", name), m.name,
+                             errors, seconds, "distance from the reference (column heights)",
+                             "seconds to 0.3 s"));
+    curves[m.name] = {errors, seconds};
+  }
+  // Speed at equal error: at the adaptive finest row's error, what each regular method needs.
+  const auto& [ae, as] = curves["adaptive-rbf"];
+  const double target = ae.back();
+  double fastest = std::numeric_limits<double>::infinity();
+  std::string fastest_name;
+  for (const FlowMethod& m : kMethods) {
+    if (m.adaptive) continue;
+    const auto& [e, s] = curves[m.name];
+    const double t = seconds_at(e, s, target);
+    if (std::isfinite(t) && t < fastest) fastest = t, fastest_name = m.name;
+  }
+  result.notes.push_back(
+      std::isfinite(fastest)
+          ? fmt::format(
+                "speed at equal error ({:.3g} column heights): adaptive RBF {:.2f} s, the fastest regular "
+                "method {} {:.2f} s: {:.2f} times {}",
+                target, as.back(), fastest_name, fastest,
+                as.back() < fastest ? fastest / as.back() : as.back() / fastest,
+                as.back() < fastest ? "faster" : "slower")
+          : fmt::format(
+                "speed at equal error: no regular method's rows bracket the adaptive finest row's error "
+                "{:.3g}; see the table",
+                target));
+  result.fields.set("series", std::move(series));
+  result.tables.push_back(std::move(table));
+  return result;
+}
+
+}  // namespace
+
+LIQUID_VERIFICATION_CASE(
+    {"dam-break-convergence",
+     "dam break (2D, levels 4-6, reference at 7): front and surface against a finer reference run, error "
+     "against seconds for adaptive RBF, APIC and FLIP",
+     true, run<2>, no_options});
+LIQUID_VERIFICATION_CASE({"dam-break-convergence-3d",
+                          "dam break (3D, levels 4-6, reference at 7): front and surface against a finer "
+                          "run, speed at equal error for adaptive RBF, APIC and FLIP",
+                          false, run<3>, no_options});
+
+}  // namespace liquid::verification
