@@ -242,6 +242,11 @@ def scale_ratios(groups):
     return rows
 
 
+def fmt(x, spec):
+    """x formatted, or '-' when it is not a number (no paper row at that h, no memory figure)."""
+    return "-" if x != x else format(x, spec)
+
+
 def scale_table(rows):
     lines = ["", "## Scale tier: the gain at the paper's sizes (ci/bench-scenes --paper-sizes)", "",
              "Adaptive RBF against regular APIC at the same finest h, over the stated window of steps from the "
@@ -256,7 +261,8 @@ def scale_table(rows):
         lines.append(
             f"| {scene} | 2^-{level} | {r['window']} | {r['ta']:.3f} | {r['tg']:.3f} | {1 / r['time']:.2f}x | "
             f"{100 * r['cells']:.0f}% | {100 * r['particles']:.0f}% | {r['per_particle']:.2f} | {r['core_us']:.1f} | "
-            f"{r['paper_us']:.1f} | {r['core_us'] / r['paper_us']:.3f} | {r['peak_a']:.0f} | {r['peak_g']:.0f} |")
+            f"{fmt(r['paper_us'], '.1f')} | {fmt(r['core_us'] / r['paper_us'], '.3f')} | {fmt(r['peak_a'], '.0f')} | "
+            f"{fmt(r['peak_g'], '.0f')} |")
     return lines
 
 

@@ -121,6 +121,8 @@ void add_study_flags(CLI::App& app, StudyFlags& f) {
       ->transform(CLI::CheckedTransformer(perturb_names));
   app.add_option("--trees", f.trees_dir, "write the trees the case checks to DIR as HDF5 + XDMF (ParaView)")
       ->check(CLI::ExistingDirectory);
+  app.add_option("--methods", f.methods, "flow studies: run only these methods (comma-separated row names)")
+      ->delimiter(',');
   app.add_option("--max-cells", f.max_cells, kMaxCellsHelp)->check(CLI::Range(1L, 1'000'000'000'000L));
   app.add_flag("--full", f.full, "use the full suite's extent");
 }
@@ -129,7 +131,8 @@ CaseOptions case_options(const StudyFlags& f, const CaseInfo& info) {
   std::vector<std::string> refused;
   for (Option o : {Option::levels, Option::max_jump, Option::solver, Option::stencil, Option::rbf_exponent,
                    Option::rbf_degree, Option::gradient_degree, Option::stencil_growth, Option::ring_cap,
-                   Option::rows, Option::nullspace, Option::tolerance, Option::perturb, Option::trees})
+                   Option::rows, Option::nullspace, Option::tolerance, Option::perturb, Option::trees,
+                   Option::methods})
     if (f.given(o) && !info.accepts_option(o)) refused.push_back(flag_of(o));
   if (!refused.empty()) {
     std::vector<std::string> accepted;
@@ -164,6 +167,10 @@ CaseOptions case_options(const StudyFlags& f, const CaseInfo& info) {
   if (f.given(Option::tolerance)) o.tolerance = f.tolerance;
   if (f.given(Option::perturb)) o.perturb = f.perturb;
   if (f.given(Option::trees)) o.trees_dir = f.trees_dir;
+  if (f.given(Option::methods)) {
+    if (f.methods.empty()) throw Error("--methods: give at least one method");
+    o.methods = f.methods;
+  }
   o.max_cells = f.max_cells;
   o.full = f.full;
   return o;
@@ -188,6 +195,7 @@ std::string echo(const std::string& case_name, const StudyFlags& f) {
   s += show(Option::tolerance, fmt::format("{:g}", f.tolerance));
   s += show(Option::perturb, name_of(perturb_names, f.perturb));
   s += show(Option::trees, f.trees_dir);
+  s += show(Option::methods, fmt::format("{}", fmt::join(f.methods, ",")));
   s += fmt::format(" --max-cells {} --tier {}", f.max_cells, f.full ? "full" : "quick");
   return s;
 }

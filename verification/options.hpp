@@ -27,6 +27,7 @@ struct StudyFlags {
   double tolerance = 1e-10;
   Perturbation perturb = Perturbation::first_order;
   std::string trees_dir;
+  std::vector<std::string> methods;
   long max_cells = 0;
   bool full = false;
 

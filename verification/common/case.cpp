@@ -39,6 +39,8 @@ const char* flag_of(Option option) {
       return "--perturb";
     case Option::trees:
       return "--trees";
+    case Option::methods:
+      return "--methods";
   }
   return "?";
 }

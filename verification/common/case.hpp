@@ -32,7 +32,8 @@ enum class Option {
   nullspace,
   tolerance,
   perturb,
-  trees
+  trees,
+  methods
 };
 using OptionSet = std::vector<Option>;
 /// The command-line flag of an option ("--max-jump").
@@ -70,6 +71,7 @@ struct CaseOptions {
   std::optional<double> tolerance;           ///< --tolerance T: the solver's relative residual
   std::optional<Perturbation> perturb;       ///< --perturb first-order
   std::optional<std::string> trees_dir;      ///< --trees DIR: write the trees checked
+  std::vector<std::string> methods;          ///< --methods A,B: run only these rows (empty: all)
   long max_cells = 0;                        ///< budget: refuse rows above this many cells (0: no limit)
   bool full = false;                         ///< the full suite's extent rather than the quick one
 };

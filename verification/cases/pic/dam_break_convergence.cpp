@@ -21,6 +21,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <map>
 #include <string>
@@ -153,6 +154,8 @@ CaseResult run(const CaseOptions& options) {
     for (int level : levels) {
       const Run r = run_method<Dim>(m, level);
       const double e = error(r, reference);
+      fmt::print("  {} L{}: distance from the reference {:.3f} in {:.2f} s\n", m.name, level, e, r.seconds);
+      std::fflush(stdout);
       table.add_row({std::string(m.name), long(level), r.steps, r.particles, e, r.seconds, r.at.back().front,
                      reference.at.back().front});
       errors.push_back(e), seconds.push_back(r.seconds), hs.push_back(std::ldexp(1.0, -level));
