@@ -1,6 +1,7 @@
 #include "gate.hpp"
 
 #include <cmath>
+#include <initializer_list>
 #include <filesystem>
 #include <sstream>
 
@@ -43,9 +44,26 @@ std::string where(const std::string& path, const toml::source_region& r) {
   return fmt::format("{}:{}", path, r.begin.line);
 }
 
+/// Refuses, naming file:line and key, a key of `table` that is not one of `known`: a misspelt
+/// tolerance or a figure's own tolerance would otherwise be read as nothing and loosen nothing.
+void only_known_keys(const toml::table& table, const std::string& path, const std::string& prefix,
+                     std::initializer_list<const char*> known) {
+  for (const auto& [key, node] : table) {
+    bool ok = false;
+    for (const char* k : known) ok = ok || key.str() == k;
+    std::string names;
+    for (const char* k : known) names += (names.empty() ? "" : ", ") + std::string(k);
+    LIQUID_VERIFY(ok, "{}: unknown key '{}{}' (known: {})", where(path, node.source()), prefix, key.str(), names);
+  }
+}
+
 GateTolerance read_tolerance(const toml::table& doc, const std::string& path) {
   GateTolerance t;
+  if (const auto* node = doc.get("tolerance"))
+    LIQUID_VERIFY(node->is_table(), "{}: 'tolerance' must be a table [tolerance] of error_rel, error_floor, "
+                  "order_drop and iterations_rel", where(path, node->source()));
   if (const auto* tol = doc["tolerance"].as_table()) {
+    only_known_keys(*tol, path, "tolerance.", {"error_rel", "error_floor", "order_drop", "iterations_rel"});
     auto get = [&](const char* key, double& out) {
       if (const auto* node = tol->get(key)) {
         const auto v = node->value<double>();
@@ -76,6 +94,7 @@ toml::table parse_file(const std::string& path) {
 
 std::vector<AcceptedFigure> read_reference(const std::string& path, GateTolerance& tol) {
   const toml::table doc = parse_file(path);
+  only_known_keys(doc, path, "", {"case", "tolerance", "figure"});
   tol = read_tolerance(doc, path);
   const auto* list = doc["figure"].as_array();
   LIQUID_VERIFY(list != nullptr, "{}: no [[figure]] entries", path);
@@ -83,6 +102,7 @@ std::vector<AcceptedFigure> read_reference(const std::string& path, GateToleranc
   for (const auto& node : *list) {
     const auto* t = node.as_table();
     LIQUID_VERIFY(t != nullptr, "{}: [[figure]] must be a table", where(path, node.source()));
+    only_known_keys(*t, path, "figure.", {"name", "kind", "value"});
     const auto name = (*t)["name"].value<std::string>();
     const auto kind = (*t)["kind"].value<std::string>();
     const auto value = (*t)["value"].value<double>();

@@ -13,9 +13,8 @@
 // with its standard error and the doubling time ln 2 / lambda.
 // Exact solution: u = 0, p = g (H - y).
 // Expected (asserted), for the default and for APIC: the speed stays below 1e-6 sqrt(gH) for the
-// whole run, and the growth rate is at most 2 standard errors above 0.1 / s (a doubling time of
-// 7 s or more: what linear growth from the noise floor shows over the run's second half; the
-// paper's preset grows with a doubling time near 1 s in 3D). The paper's preset is reported and
+// whole run, and the growth rate is not above 0 by more than 2 standard errors (the paper's preset
+// grows with a doubling time near 1 s in 3D). The paper's preset is reported and
 // warned about when it grows. Gated: the largest speed of every row (floored at 1e-12).
 
 #include <cmath>
@@ -136,7 +135,7 @@ void study(const Tank& tank, Table& table, Table& series, CaseResult& result) {
     }
     const std::string key = fmt::format("{}D {} L{} {}", Dim, tank.name, tank.finest, m.name);
     result.gate.push_back({key + " max particle speed", GateFigure::Kind::error, std::max(o.largest, 1e-12)});
-    const bool grows = !(o.rate - 2.0 * o.rate_error <= 0.1);
+    const bool grows = !(o.rate - 2.0 * o.rate_error <= 0.0);
     if (m.paper) {
       if (grows || o.largest > 1e-6)
         result.warnings.push_back(fmt::format(
