@@ -129,10 +129,10 @@ void add_study_flags(CLI::App& app, StudyFlags& f) {
 
 CaseOptions case_options(const StudyFlags& f, const CaseInfo& info) {
   std::vector<std::string> refused;
-  for (Option o : {Option::levels, Option::max_jump, Option::solver, Option::stencil, Option::rbf_exponent,
-                   Option::rbf_degree, Option::gradient_degree, Option::stencil_growth, Option::ring_cap,
-                   Option::rows, Option::nullspace, Option::tolerance, Option::perturb, Option::trees,
-                   Option::methods})
+  for (Option o :
+       {Option::levels, Option::max_jump, Option::solver, Option::stencil, Option::rbf_exponent,
+        Option::rbf_degree, Option::gradient_degree, Option::stencil_growth, Option::ring_cap, Option::rows,
+        Option::nullspace, Option::tolerance, Option::perturb, Option::trees, Option::methods})
     if (f.given(o) && !info.accepts_option(o)) refused.push_back(flag_of(o));
   if (!refused.empty()) {
     std::vector<std::string> accepted;

@@ -1,8 +1,8 @@
 #include "gate.hpp"
 
 #include <cmath>
-#include <initializer_list>
 #include <filesystem>
+#include <initializer_list>
 #include <sstream>
 
 #include <fmt/format.h>
@@ -53,15 +53,18 @@ void only_known_keys(const toml::table& table, const std::string& path, const st
     for (const char* k : known) ok = ok || key.str() == k;
     std::string names;
     for (const char* k : known) names += (names.empty() ? "" : ", ") + std::string(k);
-    LIQUID_VERIFY(ok, "{}: unknown key '{}{}' (known: {})", where(path, node.source()), prefix, key.str(), names);
+    LIQUID_VERIFY(ok, "{}: unknown key '{}{}' (known: {})", where(path, node.source()), prefix, key.str(),
+                  names);
   }
 }
 
 GateTolerance read_tolerance(const toml::table& doc, const std::string& path) {
   GateTolerance t;
   if (const auto* node = doc.get("tolerance"))
-    LIQUID_VERIFY(node->is_table(), "{}: 'tolerance' must be a table [tolerance] of error_rel, error_floor, "
-                  "order_drop and iterations_rel", where(path, node->source()));
+    LIQUID_VERIFY(node->is_table(),
+                  "{}: 'tolerance' must be a table [tolerance] of error_rel, error_floor, "
+                  "order_drop and iterations_rel",
+                  where(path, node->source()));
   if (const auto* tol = doc["tolerance"].as_table()) {
     only_known_keys(*tol, path, "tolerance.", {"error_rel", "error_floor", "order_drop", "iterations_rel"});
     auto get = [&](const char* key, double& out) {

@@ -15,9 +15,10 @@
 // profile from the reference's, in units of the column's height. Seconds: the run's wall time to 0.3 s.
 // Expected (asserted): every method's error falls from the coarsest row to the finest (it converges
 // towards the reference); warned about when it falls by less than a quarter. In 3D the rows do not
-// converge towards the level-7 reference (docs/findings/dam-break-convergence.md). Reported: each method's error against seconds (plotted in the report),
-// and the adaptive run's speed at equal error against the fastest regular method (interpolated in
-// log-log between its rows). Gated: the error of every method and row.
+// converge towards the level-7 reference (docs/findings/dam-break-convergence.md). Reported: each method's
+// error against seconds (plotted in the report), and the adaptive run's speed at equal error against the
+// fastest regular method (interpolated in log-log between its rows). Gated: the error of every method and
+// row.
 
 #include <algorithm>
 #include <array>

@@ -123,8 +123,9 @@ void study(const Tank& tank, Table& table, Table& series, CaseResult& result) {
   for (const Method& m : kMethods) {
     const Outcome o = run_pool<Dim>(m, tank);
     const double doubling = o.rate > 0 ? std::log(2.0) / o.rate : std::numeric_limits<double>::infinity();
-    fmt::print("  {}D {} L{} {}: largest speed {:.2e} sqrt(gH), growth {:.3f} / s ({} steps, {:.3f} s/step)\n",
-               Dim, tank.name, tank.finest, m.name, o.largest, o.rate, o.steps, o.seconds_per_step);
+    fmt::print(
+        "  {}D {} L{} {}: largest speed {:.2e} sqrt(gH), growth {:.3f} / s ({} steps, {:.3f} s/step)\n", Dim,
+        tank.name, tank.finest, m.name, o.largest, o.rate, o.steps, o.seconds_per_step);
     std::fflush(stdout);
     table.add_row({long(Dim), std::string(tank.name), long(tank.finest), std::string(m.name), o.steps,
                    tank.end, o.largest, o.last, o.rate, o.rate_error, doubling, o.seconds_per_step});
