@@ -434,7 +434,7 @@ void print_scene_row(const std::string& name, const std::string& path) {
   const std::string grid =
       s.sph ? std::string("particles") : fmt::format("{} / {}", s.pic.coarse_level, s.pic.finest_level);
   const std::string length =
-      std::isfinite(s.time.end) ? fmt::format("{:g} s", s.time.end) : fmt::format("{} steps", s.time.steps);
+      std::isfinite(s.time.end) ? fmt::format("{:g}", s.time.end) : fmt::format("{} steps", s.time.steps);
   const std::string method =
       s.sph ? std::string("adaptive SPH")
             : (s.pic.adaptive ? std::string("adaptive ") : std::string("regular ")) + s.method();
@@ -445,7 +445,7 @@ void print_scene_row(const std::string& name, const std::string& path) {
 /// The built-in scenes as the README's Markdown table.
 void print_scene_table() {
   fmt::print(
-      "| scene | dim | method | paper figure | what it shows | levels (coarse / finest) | simulated |\n");
+      "| scene | dim | method | paper figure | what it shows | levels (coarse / finest) | simulated (s) |\n");
   fmt::print("| --- | --- | --- | --- | --- | --- | --- |\n");
   for (const auto& [name, description] : scene::builtin_scenes()) {
     const std::string path = scene::find_scene(name);

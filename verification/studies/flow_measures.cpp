@@ -1,5 +1,11 @@
 #include "studies/flow_measures.hpp"
 
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <utility>
+
+#include "common/fit.hpp"
 #include "liquid/transfer/regular.hpp"
 
 namespace liquid::verification {
@@ -53,5 +59,37 @@ template double affine_energy<2>(const pic::AdaptivePic<2>&, std::span<const dou
 template double affine_energy<3>(const pic::AdaptivePic<3>&, std::span<const double>);
 template double twice_kinetic_energy<2>(const pic::AdaptivePic<2>&, double);
 template double twice_kinetic_energy<3>(const pic::AdaptivePic<3>&, double);
+
+double seconds_at_error(const std::vector<double>& errors, const std::vector<double>& seconds, double target,
+                        Reach& how) {
+  std::vector<std::pair<double, double>> pts;  // (log error, log seconds)
+  for (std::size_t i = 0; i < errors.size() && i < seconds.size(); ++i)
+    if (errors[i] > 0.0 && seconds[i] > 0.0) pts.emplace_back(std::log(errors[i]), std::log(seconds[i]));
+  std::sort(pts.begin(), pts.end());
+  const double x = std::log(target);
+  how = Reach::interpolated;
+  if (!pts.empty() && x >= pts.back().first) {
+    double best = std::numeric_limits<double>::infinity();
+    for (const auto& p : pts) best = std::min(best, p.second);
+    how = Reach::at_most;
+    return std::exp(best);
+  }
+  for (std::size_t i = 0; i + 1 < pts.size(); ++i)
+    if (pts[i].first <= x && x <= pts[i + 1].first && pts[i + 1].first > pts[i].first) {
+      const double f = (x - pts[i].first) / (pts[i + 1].first - pts[i].first);
+      return std::exp(pts[i].second + f * (pts[i + 1].second - pts[i].second));
+    }
+  how = Reach::extrapolated;
+  if (pts.size() < 2) return pts.empty() ? NAN : std::exp(pts[0].second);
+  // The power law through the points' mean with fit_order's least-squares slope (log base is moot).
+  std::vector<double> e, t;
+  double mx = 0, my = 0;
+  for (const auto& p : pts) {
+    e.push_back(std::exp(p.first)), t.push_back(std::exp(p.second));
+    mx += p.first / static_cast<double>(pts.size()), my += p.second / static_cast<double>(pts.size());
+  }
+  const double slope = fit_order(e, t);
+  return std::exp(my + (std::isfinite(slope) ? slope : 0.0) * (x - mx));
+}
 
 }  // namespace liquid::verification

@@ -73,4 +73,14 @@ Vec<Dim> taylor_green(const Vec<Dim>& x) {
   return u;
 }
 
+/// How seconds_at_error found its figure.
+enum class Reach { run, interpolated, at_most, extrapolated };
+
+/// Seconds a method needs to reach the error `target`, from its runs' (error, seconds): log-log
+/// interpolation between the two runs that bracket the target. When even its least accurate run
+/// beats the target, the cheapest such run's seconds (an upper bound: `at_most`); when its most
+/// accurate run does not reach it, the least-squares power law over all runs (`extrapolated`).
+double seconds_at_error(const std::vector<double>& errors, const std::vector<double>& seconds, double target,
+                        Reach& how);
+
 }  // namespace liquid::verification

@@ -123,18 +123,6 @@ double error(const Run& r, const Run& ref) {
   return e;
 }
 
-/// Seconds a method's rows need to reach `target`, log-log between the two rows around it; NaN when
-/// its rows do not bracket the target.
-double seconds_at(const std::vector<double>& errors, const std::vector<double>& seconds, double target) {
-  for (std::size_t i = 0; i + 1 < errors.size(); ++i) {
-    const double e0 = errors[i], e1 = errors[i + 1];
-    if ((e0 - target) * (e1 - target) > 0.0 || e0 == e1 || e0 <= 0.0 || e1 <= 0.0) continue;
-    const double f = std::log(target / e0) / std::log(e1 / e0);
-    return std::exp(std::log(seconds[i]) + f * (std::log(seconds[i + 1]) - std::log(seconds[i])));
-  }
-  return NAN;
-}
-
 template <int Dim>
 CaseResult run(const CaseOptions& options) {
   CaseResult result;
@@ -187,8 +175,9 @@ CaseResult run(const CaseOptions& options) {
   for (const FlowMethod& m : kMethods) {
     if (m.adaptive) continue;
     const auto& [e, s] = curves[m.name];
-    const double t = seconds_at(e, s, target);
-    if (std::isfinite(t) && t < fastest) fastest = t, fastest_name = m.name;
+    Reach how = Reach::run;
+    const double t = seconds_at_error(e, s, target, how);
+    if (how == Reach::interpolated && t < fastest) fastest = t, fastest_name = m.name;
   }
   result.notes.push_back(
       std::isfinite(fastest)

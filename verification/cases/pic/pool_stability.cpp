@@ -31,21 +31,16 @@
 #include "liquid/core/timer.hpp"
 #include "liquid/pic/adaptive_pic.hpp"
 #include "liquid/scene/scene.hpp"
+#include "studies/flow_measures.hpp"
 
 namespace liquid::verification {
 namespace {
 
 constexpr double kDepth = 0.3, kGravity = 9.81;
 
-struct Method {
-  const char* name;
-  bool adaptive;
-  pic::PicTransfer transfer;
-  bool paper;
-};
-const Method kMethods[] = {{"adaptive-rbf", true, pic::PicTransfer::rbf, false},
-                           {"adaptive-rbf-paper", true, pic::PicTransfer::rbf, true},
-                           {"regular-apic", false, pic::PicTransfer::apic, false}};
+const FlowMethod kMethods[] = {{"adaptive-rbf", true, pic::PicTransfer::rbf, false},
+                               {"adaptive-rbf-paper", true, pic::PicTransfer::rbf, true},
+                               {"regular-apic", false, pic::PicTransfer::apic, false}};
 
 struct Tank {
   const char* name;
@@ -82,7 +77,7 @@ std::pair<double, double> growth_rate(const std::vector<double>& t, const std::v
 }
 
 template <int Dim>
-Outcome run_pool(const Method& m, const Tank& tank) {
+Outcome run_pool(const FlowMethod& m, const Tank& tank) {
   pic::PicOptions<Dim> o;
   Vec<Dim> size = Vec<Dim>::Ones();
   size[0] = tank.length;
@@ -120,7 +115,7 @@ Outcome run_pool(const Method& m, const Tank& tank) {
 
 template <int Dim>
 void study(const Tank& tank, Table& table, Table& series, CaseResult& result) {
-  for (const Method& m : kMethods) {
+  for (const FlowMethod& m : kMethods) {
     const Outcome o = run_pool<Dim>(m, tank);
     const double doubling = o.rate > 0 ? std::log(2.0) / o.rate : std::numeric_limits<double>::infinity();
     fmt::print(

@@ -185,44 +185,11 @@ struct Run {
   double seconds() const { return seconds_per_step * static_cast<double>(steps); }
 };
 
-/// How seconds_at_error found its figure.
-enum class Reach { run, interpolated, at_most, extrapolated };
-
-/// Seconds a method needs to reach the L-inf error `target`, from its runs' (error, seconds) at the
-/// levels: log-log interpolation between the two runs that bracket the target. When even its least
-/// accurate run beats the target, the cheapest such run's seconds (an upper bound: `at_most`); when
-/// its most accurate run does not reach it, the least-squares power law over all runs
-/// (`extrapolated`).
+/// Seconds a method's runs need to reach `target` (seconds_at_error over their errors at 4T).
 double seconds_at_error(const std::vector<Run>& runs, double target, Reach& how) {
-  std::vector<std::pair<double, double>> pts;  // (log error, log seconds)
-  for (const Run& r : runs)
-    if (r.at[2].error > 0.0 && r.seconds() > 0.0)
-      pts.emplace_back(std::log(r.at[2].error), std::log(r.seconds()));
-  std::sort(pts.begin(), pts.end());
-  const double x = std::log(target);
-  how = Reach::interpolated;
-  if (!pts.empty() && x >= pts.back().first) {
-    double best = std::numeric_limits<double>::infinity();
-    for (const auto& p : pts) best = std::min(best, p.second);
-    how = Reach::at_most;
-    return std::exp(best);
-  }
-  for (std::size_t i = 0; i + 1 < pts.size(); ++i)
-    if (pts[i].first <= x && x <= pts[i + 1].first && pts[i + 1].first > pts[i].first) {
-      const double f = (x - pts[i].first) / (pts[i + 1].first - pts[i].first);
-      return std::exp(pts[i].second + f * (pts[i + 1].second - pts[i].second));
-    }
-  how = Reach::extrapolated;
-  if (pts.size() < 2) return pts.empty() ? NAN : std::exp(pts[0].second);
-  // The power law through the points' mean with fit_order's least-squares slope (log base is moot).
   std::vector<double> errors, seconds;
-  double mx = 0, my = 0;
-  for (const auto& p : pts) {
-    errors.push_back(std::exp(p.first)), seconds.push_back(std::exp(p.second));
-    mx += p.first / static_cast<double>(pts.size()), my += p.second / static_cast<double>(pts.size());
-  }
-  const double slope = fit_order(errors, seconds);
-  return std::exp(my + (std::isfinite(slope) ? slope : 0.0) * (x - mx));
+  for (const Run& r : runs) errors.push_back(r.at[2].error), seconds.push_back(r.seconds());
+  return verification::seconds_at_error(errors, seconds, target, how);
 }
 
 template <int Dim>
