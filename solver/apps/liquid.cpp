@@ -89,8 +89,9 @@ void echo(const scene::Scene<Dim>& s, const scene::RunSettings& settings, bool r
                  : "",
              o.poisson.nullspace == mac::Nullspace::pin ? "; a closed box's PPE pinned at one cell" : "");
   if (rbf_transfer)
-    fmt::print("  transfer    PHS r^{} + degree {}{}\n", o.rbf.exponent, o.rbf.degree,
-               s.paper_preset ? " (the paper's preset)" : "");
+    fmt::print("  transfer    {}PHS r^{} + degree {}{}\n",
+               o.adaptive && o.uniform_patches ? "APIC in uniform patches, across level changes " : "",
+               o.rbf.exponent, o.rbf.degree, s.paper_preset ? " (the paper's preset)" : "");
   if (o.reseed && rbf_transfer) {
     const bool holes = (o.reseeding.lo == 0 && o.reseeding.hi == 0) ||
                        (o.reseeding.lo == 1 && o.reseeding.hi == std::numeric_limits<int>::max());

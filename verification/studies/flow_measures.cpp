@@ -5,10 +5,30 @@
 #include <limits>
 #include <utility>
 
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
 #include "common/fit.hpp"
+#include "liquid/core/error.hpp"
+#include "liquid/transfer/patches.hpp"
 #include "liquid/transfer/regular.hpp"
 
 namespace liquid::verification {
+
+std::vector<FlowMethod> chosen_methods(std::span<const FlowMethod> all, const std::vector<std::string>& names) {
+  if (names.empty()) return {all.begin(), all.end()};
+  std::vector<FlowMethod> out;
+  std::vector<std::string> known;
+  for (const FlowMethod& m : all) known.emplace_back(m.name);
+  for (const std::string& name : names) {
+    const auto it = std::find(known.begin(), known.end(), name);
+    if (it == known.end())
+      throw Error(fmt::format("--methods: '{}' is not a method of this case (its methods: {})", name,
+                              fmt::join(known, ", ")));
+    out.push_back(all[static_cast<std::size_t>(it - known.begin())]);
+  }
+  return out;
+}
 
 template <int Dim>
 std::vector<double> particle_volumes(const tree::CellGraph<Dim>& graph, std::span<const Vec<Dim>> x,
@@ -38,8 +58,22 @@ template <int Dim>
 double affine_energy(const pic::AdaptivePic<Dim>& sim, std::span<const double> w) {
   const particles::Particles<Dim>& p = sim.particles();
   const int c = p.find_field("apic");
-  if (sim.options().transfer != pic::PicTransfer::apic || c < 0) return 0.0;
-  return transfer::particle_affine_energy<Dim>(transfer::RegularLattice<Dim>(sim.graph()), p, p.field(c), w);
+  if (c < 0) return 0.0;
+  if (sim.options().transfer == pic::PicTransfer::apic)
+    return transfer::particle_affine_energy<Dim>(transfer::RegularLattice<Dim>(sim.graph()), p, p.field(c), w);
+  // Adaptive RBF with uniform patches: each particle's C in the lattice of its cell's level.
+  const std::span<const double> affine = p.field(c);
+  double total = 0.0;
+  tree::CellId hint = tree::no_cell;
+  for (int i = 0; i < p.size(); ++i) {
+    hint = hint == tree::no_cell ? sim.graph().locate(p.x[i]) : sim.graph().locate(p.x[i], hint);
+    if (sim.graph().level(hint) < 1) continue;
+    for (int k = 0; k < Dim; ++k) {
+      const Vec<Dim> ck = Eigen::Map<const Vec<Dim>>(affine.data() + (i * Dim + k) * Dim);
+      total += 0.5 * (w.empty() ? 1.0 : w[i]) * ck.dot(transfer::patch_inertia<Dim>(sim.graph(), hint, k, p.x[i]) * ck);
+    }
+  }
+  return total;
 }
 
 template <int Dim>

@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <span>
+#include <string>
 #include <vector>
 
 #include "liquid/pic/adaptive_pic.hpp"
@@ -17,7 +18,11 @@ struct FlowMethod {
   bool adaptive;
   pic::PicTransfer transfer;
   bool paper = false;
+  bool rbf_everywhere = false;  ///< adaptive RBF without the uniform patches' APIC transfers
 };
+/// The methods of `all` that --methods names, in the order named (every one when none is named);
+/// throws naming a method that is not one of them.
+std::vector<FlowMethod> chosen_methods(std::span<const FlowMethod> all, const std::vector<std::string>& names);
 /// The flow studies' methods, side by side: adaptive RBF with the default transfer and reseeding,
 /// the same with the paper's preset, RBF on the uniform tree, and the regular baselines PIC, FLIP and
 /// APIC.
@@ -53,8 +58,9 @@ struct ProjectionEnergy {
 template <int Dim>
 std::vector<double> particle_volumes(const tree::CellGraph<Dim>& graph, std::span<const Vec<Dim>> x,
                                      double volume, double* filled = nullptr);
-/// APIC's affine kinetic energy (particle_affine_energy), each particle weighing w_i; 0 for the
-/// other transfers, whose particles carry no affine part.
+/// APIC's affine kinetic energy (particle_affine_energy), each particle weighing w_i; with adaptive
+/// RBF's uniform patches the same in the lattice of each particle's cell level (patch_inertia); 0 for
+/// the other transfers, whose particles carry no affine part.
 template <int Dim>
 double affine_energy(const pic::AdaptivePic<Dim>& sim, std::span<const double> w);
 

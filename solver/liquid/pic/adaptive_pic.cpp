@@ -109,7 +109,7 @@ AdaptivePic<Dim>::AdaptivePic(const PicOptions<Dim>& options)
   }
   if (options_.transfer != PicTransfer::rbf)
     lattice_ = std::make_unique<transfer::RegularLattice<Dim>>(graph_);
-  if (options_.transfer == PicTransfer::apic) apic_field_ = particles_.add_field("apic", Dim * Dim);
+  if (affine_particles()) apic_field_ = particles_.add_field("apic", Dim * Dim);
   u_.assign(graph_.face_capacity(), 0.0);
   known_.assign(graph_.face_capacity(), 1);
   p_.assign(graph_.cell_capacity(), 0.0);
@@ -250,6 +250,9 @@ void AdaptivePic<Dim>::restore(const PicState<Dim>& s) {
     apic_field_ = particles_.find_field("apic");
     LIQUID_VERIFY(apic_field_ >= 0,
                   "PIC: the saved state has no 'apic' particle field for the APIC transfer");
+  } else if (affine_particles()) {  // a state saved without patches: C = 0 is PIC's start
+    apic_field_ = particles_.find_field("apic");
+    if (apic_field_ < 0) apic_field_ = particles_.add_field("apic", Dim * Dim);
   }
   for (tree::CellId c : s.particle_cell)
     LIQUID_VERIFY(graph_.alive(c), "PIC: a saved particle is binned in cell {}, which is not a leaf", c);
@@ -388,15 +391,46 @@ void AdaptivePic<Dim>::adapt_grid(PicStepReport& r) {
 }
 
 template <int Dim>
+bool AdaptivePic<Dim>::affine_particles() const {
+  return options_.transfer == PicTransfer::apic ||
+         (options_.transfer == PicTransfer::rbf && options_.adaptive && options_.uniform_patches);
+}
+
+template <int Dim>
+std::vector<tree::CellId> AdaptivePic<Dim>::near_liquid_cells() const {
+  std::vector<tree::CellId> cells;  // where particles are, and one ring around
+  std::vector<std::uint8_t> seen(graph_.cell_capacity(), 0);
+  std::vector<tree::CellId> ring;
+  for (tree::CellId c : cls_.fluid) {
+    graph_.k_ring(c, 1, ring);
+    for (tree::CellId q : ring)
+      if (!seen[q]) seen[q] = 1, cells.push_back(q);
+  }
+  std::sort(cells.begin(), cells.end());
+  return cells;
+}
+
+template <int Dim>
 void AdaptivePic<Dim>::to_faces(PicStepReport& r) {
   transfer::FaceValues faces;
-  if (lattice_)
+  patches_.reset();
+  if (lattice_) {
     r.p2g = transfer::linear_to_faces<Dim>(
         graph_, *lattice_, particles_, bins_,
         options_.transfer == PicTransfer::apic ? transfer::RegularScheme::apic : transfer::RegularScheme::pic,
         {}, faces);
-  else
+  } else if (affine_particles()) {
+    near_cells_ = near_liquid_cells();
+    patches_ = std::make_unique<transfer::UniformPatches<Dim>>(graph_, near_cells_);
+    r.p2g = transfer::particles_to_faces<Dim>(graph_, particles_, bins_, options_.rbf, faces,
+                                              patches_->face_mask());
+    r.p2g += patches_->to_faces(particles_, bins_, particles_.field(apic_field_), faces);
+    r.patch_cells = patches_->n_cells();
+    r.near_cells = static_cast<long>(near_cells_.size());
+    r.patch_faces = patches_->n_faces();
+  } else {
     r.p2g = transfer::particles_to_faces<Dim>(graph_, particles_, bins_, options_.rbf, faces);
+  }
   r.unknown_faces = r.p2g.empty;
   // The transfer's masses are unit particle masses times weights: a full cell's seeded particles
   // (2^Dim) weigh 2^Dim on each of its faces. Kept for every regular transfer (pressure_work; the
@@ -712,19 +746,24 @@ void AdaptivePic<Dim>::to_particles(PicStepReport& r) {
     r.g2p = transfer::linear_to_points<Dim>(*lattice_, u_, particles_.x, grid, affine);
   } else {
     // One RBF field serves g2p and the advection after it: each cell's interpolants are factorised
-    // once a step instead of twice (the same stencils and values as faces_to_points).
-    std::vector<tree::CellId> cells;  // where particles are, and one ring around
-    std::vector<std::uint8_t> seen(graph_.cell_capacity(), 0);
-    std::vector<tree::CellId> ring;
-    for (tree::CellId c : cls_.fluid) {
-      graph_.k_ring(c, 1, ring);
-      for (tree::CellId q : ring)
-        if (!seen[q]) seen[q] = 1, cells.push_back(q);
-    }
-    std::sort(cells.begin(), cells.end());
-    field_ = std::make_unique<transfer::FaceVelocityField<Dim>>(graph_, u_, known_, options_.rbf, cells);
+    // once a step instead of twice (the same stencils and values as faces_to_points). With uniform
+    // patches, a particle in a patch cell takes APIC's interpolation and matrix C; the others C = 0.
+    if (!patches_) near_cells_ = near_liquid_cells();
+    field_ = std::make_unique<transfer::FaceVelocityField<Dim>>(graph_, u_, known_, options_.rbf, near_cells_,
+                                                                patches_.get());
+    std::span<double> affine;
+    if (patches_) affine = particles_.field(apic_field_);
     parallel_for(
-        static_cast<long>(n), [&](long i) { grid[i] = (*field_)(particles_.x[i]); }, 1024);
+        static_cast<long>(n),
+        [&](long i) {
+          if (patches_ && patches_->cell(bins_.cell[i])) {
+            grid[i] = patches_->value(bins_.cell[i], particles_.x[i], u_, affine.data() + i * Dim * Dim);
+            return;
+          }
+          grid[i] = (*field_)(particles_.x[i]);
+          if (!affine.empty()) std::fill_n(affine.data() + i * Dim * Dim, Dim * Dim, 0.0);
+        },
+        1024);
     r.g2p.targets = static_cast<long>(n) * Dim;
   }
   if (options_.transfer == PicTransfer::flip) {

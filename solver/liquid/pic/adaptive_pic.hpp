@@ -104,6 +104,12 @@ struct PicOptions {
   PicTransfer transfer = PicTransfer::rbf;
   double flip = 0.95;  ///< FLIP's blend for transfer = flip (1: pure FLIP, 0: PIC)
   transfer::TransferOptions rbf = stable_rbf();
+  /// The RBF transfer on an adaptive tree: APIC's multilinear transfers inside uniform patches
+  /// (transfer::UniformPatches), the RBF only where a stencil meets a level change. false: the RBF
+  /// everywhere, as the paper (scene key `[solver] patch_transfer = "rbf"`). A uniform tree with
+  /// transfer = rbf always uses the RBF everywhere (the regular-rbf comparison row). Why:
+  /// docs/findings/transfer-stability.md.
+  bool uniform_patches = true;
   particles::Integrator integrator = particles::Integrator::rk2;
   double advect_cfl = 1.0;  ///< advection substeps keep |v| dt_sub <= advect_cfl * finest h
   int extrapolation_layers = 4;
@@ -158,11 +164,12 @@ struct PicOptions {
     reseeding.lo = Dim == 2 ? 3 : 5;
     reseeding.hi = Dim == 2 ? 12 : 15;
     reseeding.keep = false;
+    uniform_patches = false;
   }
   /// True when the transfer and reseeding are the paper's preset (what apply_paper_preset() sets).
   bool paper_preset() const {
     return rbf.exponent == 5 && rbf.degree == 2 && reseeding.lo == (Dim == 2 ? 3 : 5) &&
-           reseeding.hi == (Dim == 2 ? 12 : 15) && !reseeding.keep;
+           reseeding.hi == (Dim == 2 ? 12 : 15) && !reseeding.keep && !uniform_patches;
   }
   static Vec<Dim> default_gravity() {
     Vec<Dim> g = Vec<Dim>::Zero();
@@ -185,6 +192,9 @@ struct PicStepReport {
   linalg::SolveStats ppe_gravity;  ///< PicProjection::split: the gravity pass's solve (ppe: the mass pass's)
   transfer::TransferReport p2g, g2p;
   long unknown_faces = 0;  ///< faces no particle reached, before extrapolation
+  /// PicOptions::uniform_patches: the cells near the liquid in uniform patches (APIC transfers) and
+  /// those near the liquid in all; the faces transferred by APIC.
+  long patch_cells = 0, near_cells = 0, patch_faces = 0;
   /// Kinetic energy of the face velocities over the wet faces, 1/2 sum of u_f^2 A_f d_f (d_f the
   /// distance between the two cell centres along the axis; density 1), before the projection (after
   /// the forces) and after it; with the mass projection each face also weighs its transferred mass
@@ -272,6 +282,8 @@ class AdaptivePic {
   void adapt_grid(PicStepReport& r);
   void fill(std::span<const tree::CellId> cells, PicStepReport& r);
   void to_faces(PicStepReport& r);
+  bool affine_particles() const;  ///< particles carry APIC's C (apic, or rbf with uniform patches)
+  std::vector<tree::CellId> near_liquid_cells() const;  ///< fluid cells and one ring, sorted
   void forces(double dt);
   void assemble(double dt);
   void solve_pressure(PicStepReport& r);
@@ -293,6 +305,8 @@ class AdaptivePic {
   tree::CellGraph<Dim> graph_;
   std::unique_ptr<transfer::RegularLattice<Dim>> lattice_;   // the multilinear transfers (pic, flip, apic)
   std::unique_ptr<transfer::FaceVelocityField<Dim>> field_;  // the RBF velocity of this step (g2p, advect)
+  std::unique_ptr<transfer::UniformPatches<Dim>> patches_;   // this step's uniform patches (p2g to advect)
+  std::vector<tree::CellId> near_cells_;                     // this step's cells near the liquid
   particles::Particles<Dim> particles_;
   particles::CellBins bins_;
   pic::Classification cls_;

@@ -576,6 +576,7 @@ const std::vector<std::string> solver_keys = {"method",
                                               "nullspace",
                                               "transfer_exponent",
                                               "transfer_degree",
+                                              "patch_transfer",
                                               "preset"};
 
 /// The [solver] keys every method reads: the method, the adaptivity and gravity.
@@ -620,6 +621,7 @@ void read_pic_solver(const TableReader& r, Scene<Dim>& s) {
   LIQUID_VERIFY(o.rbf.exponent % 2 == 1, "{}: the PHS exponent must be odd (1, 3, 5, 7 or 9), got {}",
                 r.where("transfer_exponent"), o.rbf.exponent);
   o.rbf.degree = static_cast<int>(r.integer_in("transfer_degree", 0, 4, o.rbf.degree));
+  if (r.has("patch_transfer")) o.uniform_patches = r.choice("patch_transfer", {"apic", "rbf"}) == "apic";
   o.rbf.share_factors = r.boolean("share_factors", true);
   o.rbf.condition_estimate =
       r.choice("condition_estimate", {"probes", "hager-higham"}, std::string("probes")) == "probes"

@@ -199,8 +199,11 @@ template rbf::Interpolant<3> fitted_interpolant<3>(const tree::CellGraph<3>&, tr
 template <int Dim>
 TransferReport particles_to_faces(const tree::CellGraph<Dim>& graph,
                                   const particles::Particles<Dim>& particles, const particles::CellBins& bins,
-                                  const TransferOptions& options, FaceValues& out) {
+                                  const TransferOptions& options, FaceValues& out,
+                                  std::span<const std::uint8_t> skip) {
   check_options(options);
+  LIQUID_VERIFY(skip.empty() || static_cast<int>(skip.size()) >= graph.face_capacity(),
+                "particles_to_faces: {} skip flags for {} face ids", skip.size(), graph.face_capacity());
   LIQUID_VERIFY(bins.n_particles() == particles.size(),
                 "particles_to_faces: bins hold {} particles, there are {}", bins.n_particles(),
                 particles.size());
@@ -212,7 +215,7 @@ TransferReport particles_to_faces(const tree::CellGraph<Dim>& graph,
       graph.face_capacity(), [] { return Scratch<Dim>{}; },
       [&](Scratch<Dim>& s, long fl) {
         const tree::FaceId f = static_cast<tree::FaceId>(fl);
-        if (!graph.face_alive(f)) return;
+        if (!graph.face_alive(f) || (!skip.empty() && skip[f])) return;
         const int axis = graph.face(f).axis;
         face_cells(graph, f, options, s);
         auto& nodes = s.nodes;
@@ -351,7 +354,7 @@ void flip_blend(std::span<const Vec<Dim>> pic, std::span<const Vec<Dim>> delta, 
 #define LIQUID_SCATTERED(D)                                                                                \
   template TransferReport particles_to_faces<D>(const tree::CellGraph<D>&, const particles::Particles<D>&, \
                                                 const particles::CellBins&, const TransferOptions&,        \
-                                                FaceValues&);                                              \
+                                                FaceValues&, std::span<const std::uint8_t>);               \
   template TransferReport faces_to_points<D>(                                                              \
       const tree::CellGraph<D>&, std::span<const double>, std::span<const std::uint8_t>,                   \
       std::span<const Vec<D>>, const particles::CellBins&, const TransferOptions&, std::span<Vec<D>>);     \

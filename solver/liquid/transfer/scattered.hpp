@@ -83,11 +83,13 @@ struct TransferOptions {
 };
 
 /// Particle -> face for every alive face; `out` is reset to graph.face_capacity() first. Uses
-/// OpenMP. `bins` must be current for `particles`.
+/// OpenMP. `bins` must be current for `particles`. Faces with skip[f] != 0 are left unknown and not
+/// counted (another transfer fills them: UniformPatches); an empty `skip` skips none.
 template <int Dim>
 TransferReport particles_to_faces(const tree::CellGraph<Dim>& graph,
                                   const particles::Particles<Dim>& particles, const particles::CellBins& bins,
-                                  const TransferOptions& options, FaceValues& out);
+                                  const TransferOptions& options, FaceValues& out,
+                                  std::span<const std::uint8_t> skip = {});
 
 /// Face -> point: the velocity at every point x[i] (points binned in `bins`; particles or any
 /// sample points) from the face values `u` (indexed by face id). Faces with known[f] == 0 are not

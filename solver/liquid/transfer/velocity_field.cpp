@@ -22,8 +22,13 @@ struct FaceVelocityField<Dim>::CellInterpolants {
 template <int Dim>
 FaceVelocityField<Dim>::FaceVelocityField(const tree::CellGraph<Dim>& graph, std::span<const double> u,
                                           std::span<const std::uint8_t> known, const TransferOptions& options,
-                                          std::span<const tree::CellId> cells)
-    : graph_(&graph), u_(u.begin(), u.end()), known_(known.begin(), known.end()), options_(options) {
+                                          std::span<const tree::CellId> cells,
+                                          const UniformPatches<Dim>* patches)
+    : graph_(&graph),
+      patches_(patches),
+      u_(u.begin(), u.end()),
+      known_(known.begin(), known.end()),
+      options_(options) {
   LIQUID_VERIFY(options.scheme == Scheme::rbf, "FaceVelocityField: scheme {} is not offered (rbf only)",
                 to_string(options.scheme));
   LIQUID_VERIFY(static_cast<int>(u.size()) >= graph.face_capacity(),
@@ -33,6 +38,7 @@ FaceVelocityField<Dim>::FaceVelocityField(const tree::CellGraph<Dim>& graph, std
   if (options.share_factors) cache_ = std::make_unique<rbf::InterpolantCache<Dim>>();
   std::vector<tree::CellId> list(cells.begin(), cells.end());
   if (list.empty()) list = graph.cell_ids();
+  if (patches_) std::erase_if(list, [&](tree::CellId c) { return patches_->cell(c); });
   slot_.assign(graph.cell_capacity(), -1);
   prepared_.resize(list.size());
   for (std::size_t i = 0; i < list.size(); ++i) {
@@ -117,6 +123,7 @@ Vec<Dim> FaceVelocityField<Dim>::operator()(const Vec<Dim>& x) const {
     return v;
   }
   const tree::CellId c = graph_->locate(y);
+  if (patches_ && patches_->cell(c)) return patches_->value(c, y, u_);
   if (slot_[c] >= 0) return evaluate(*prepared_[slot_[c]], y);
   CellInterpolants local;
   prepare(c, local);

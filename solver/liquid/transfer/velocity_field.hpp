@@ -4,7 +4,9 @@
 // axis-k faces around x's cell (the stencil of faces_to_points); the interpolants of the cells
 // named at construction are factorised once, up front and in parallel, so an evaluation there costs
 // one point location and Dim short sums. On a uniform tree the multilinear interpolation of the
-// regular baselines is available instead (RegularLattice).
+// regular baselines is available instead (RegularLattice); on an adaptive tree, given its uniform
+// patches, points in patch cells take the patches' multilinear interpolation and only the others
+// the RBF.
 //
 //   const FaceVelocityField<2> u(graph, faces.value, faces.known, TransferOptions::paper_rbf());
 //   advect<2>(particles.x, dt, Integrator::rk3, u, graph.domain());
@@ -15,6 +17,7 @@
 #include <vector>
 
 #include "liquid/rbf/interpolant_cache.hpp"
+#include "liquid/transfer/patches.hpp"
 #include "liquid/transfer/regular.hpp"
 #include "liquid/transfer/scattered.hpp"
 #include "liquid/tree/cell_graph.hpp"
@@ -26,10 +29,11 @@ class FaceVelocityField {
  public:
   /// RBF (options.scheme must be rbf) on any tree. `u` and `known` (empty: all known) are copied.
   /// `cells`: the cells to prepare (empty: every cell); elsewhere an evaluation factorises on the
-  /// fly. Evaluations are thread-safe.
+  /// fly. Evaluations are thread-safe. `patches` (optional; must outlive the field): its patch
+  /// cells are interpolated multilinearly and not prepared.
   FaceVelocityField(const tree::CellGraph<Dim>& graph, std::span<const double> u,
                     std::span<const std::uint8_t> known, const TransferOptions& options,
-                    std::span<const tree::CellId> cells = {});
+                    std::span<const tree::CellId> cells = {}, const UniformPatches<Dim>* patches = nullptr);
   /// Multilinear interpolation on a uniform tree.
   FaceVelocityField(const tree::CellGraph<Dim>& graph, const RegularLattice<Dim>& lattice,
                     std::span<const double> u);
@@ -46,6 +50,7 @@ class FaceVelocityField {
 
   const tree::CellGraph<Dim>* graph_ = nullptr;
   const RegularLattice<Dim>* lattice_ = nullptr;
+  const UniformPatches<Dim>* patches_ = nullptr;
   std::vector<double> u_;
   std::vector<std::uint8_t> known_;
   TransferOptions options_;

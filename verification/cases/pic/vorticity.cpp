@@ -70,20 +70,9 @@ const std::vector<Method>& methods() {
   return all;
 }
 
-/// The methods --methods names (every one when none is named); throws naming one that is not a row.
+/// The methods --methods names (every one when none is named).
 std::vector<Method> chosen(const std::vector<std::string>& names) {
-  if (names.empty()) return methods();
-  std::vector<Method> out;
-  std::vector<std::string> all;
-  for (const Method& m : methods()) all.emplace_back(m.name);
-  for (const std::string& name : names) {
-    const auto it = std::find(all.begin(), all.end(), name);
-    if (it == all.end())
-      throw Error(fmt::format("--methods: '{}' is not a method of this case (its methods: {})", name,
-                              fmt::join(all, ", ")));
-    out.push_back(methods()[static_cast<std::size_t>(it - all.begin())]);
-  }
-  return out;
+  return chosen_methods(methods(), names);
 }
 
 /// The Taylor-Green cells; in 3D the same cells with w = 0 (independent of z).

@@ -1,0 +1,298 @@
+#include "liquid/transfer/patches.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include <fmt/format.h>
+
+#include "liquid/core/error.hpp"
+#include "liquid/core/parallel.hpp"
+
+namespace liquid::transfer {
+
+namespace {
+
+/// Position of offset o (each entry in {-1, 0, 1}) in a cell's 3^Dim block.
+template <int Dim>
+int block_index(const IVec<Dim>& o) {
+  int i = 0, m = 1;
+  for (int j = 0; j < Dim; ++j, m *= 3) i += static_cast<int>(o[j] + 1) * m;
+  return i;
+}
+
+/// Position of the axis-k face at offset o in a cell's table: o_k in {0 (lower side), 1 (upper)} of
+/// the cell at offset o (with o_k = 0), the other entries in {-1, 0, 1}.
+template <int Dim>
+int face_index(int k, const IVec<Dim>& o) {
+  int i = static_cast<int>(o[k]), m = 2;
+  for (int j = 0; j < Dim; ++j)
+    if (j != k) i += static_cast<int>(o[j] + 1) * m, m *= 3;
+  return i;
+}
+
+/// A point's multilinear stencil for component k, relative to the cell that holds it: corner 0 is
+/// the axis-k face at offset `off` (off_k = 0, the cell's lower side; off_j in {-1, 0}); the
+/// fractions and the clamped axes as the regular baselines' LinearStencil has them.
+template <int Dim>
+struct Local {
+  IVec<Dim> off = IVec<Dim>::Zero();
+  Vec<Dim> t = Vec<Dim>::Zero();
+  std::array<bool, Dim> clamped{};
+
+  Local(const Vec<Dim>& lo, const Vec<Dim>& h, const IVec<Dim>& a, long n, int k, const Vec<Dim>& x) {
+    for (int j = 0; j < Dim; ++j) {
+      const double s = (x[j] - lo[j]) / h[j];
+      if (j == k) {
+        t[j] = std::clamp(s, 0.0, 1.0);
+        continue;
+      }
+      const double q = std::clamp(s - 0.5, -0.5, 0.5);  // from the cell's centre line
+      if (q < 0.0) {
+        if (a[j] == 0)
+          off[j] = 0, t[j] = 0.0, clamped[j] = true;  // below the first lattice line: held on it
+        else
+          off[j] = -1, t[j] = q + 1.0;
+      } else if (a[j] == n - 1) {
+        off[j] = -1, t[j] = 1.0, clamped[j] = q > 0.0;  // beyond the last lattice line: held on it
+      } else {
+        off[j] = 0, t[j] = q;
+      }
+    }
+  }
+  double weight(int corner) const {
+    double w = 1.0;
+    for (int j = 0; j < Dim; ++j) w *= (corner >> j) & 1 ? t[j] : 1.0 - t[j];
+    return w;
+  }
+  Vec<Dim> gradient(int corner, const Vec<Dim>& h) const {
+    Vec<Dim> g;
+    for (int j = 0; j < Dim; ++j) {
+      if (clamped[j]) {
+        g[j] = 0.0;
+        continue;
+      }
+      double w = ((corner >> j) & 1 ? 1.0 : -1.0) / h[j];
+      for (int i = 0; i < Dim; ++i)
+        if (i != j) w *= (corner >> i) & 1 ? t[i] : 1.0 - t[i];
+      g[j] = w;
+    }
+    return g;
+  }
+};
+
+/// Calls fn(o) for every offset of a 3^Dim block.
+template <int Dim, class Fn>
+void for_each_offset(Fn&& fn) {
+  IVec<Dim> o = IVec<Dim>::Constant(-1);
+  while (true) {
+    fn(o);
+    int j = 0;
+    for (; j < Dim; ++j) {
+      if (++o[j] <= 1) break;
+      o[j] = -1;
+    }
+    if (j == Dim) return;
+  }
+}
+
+}  // namespace
+
+template <int Dim>
+UniformPatches<Dim>::UniformPatches(const tree::CellGraph<Dim>& graph, std::span<const tree::CellId> cells)
+    : graph_(&graph) {
+  const long m = static_cast<long>(cells.size());
+  std::vector<tree::CellId> blocks(static_cast<std::size_t>(m) * block, tree::no_cell);
+  std::vector<std::uint8_t> ok(m, 0);
+  parallel_for(
+      m,
+      [&](long i) {
+        const tree::CellId c = cells[i];
+        LIQUID_VERIFY(graph.alive(c), "UniformPatches: cell {} is not alive", c);
+        const int level = graph.level(c);
+        if (level < 1) return;
+        const long n = 1L << level;
+        const IVec<Dim> a = graph.address(c);
+        bool regular = true;
+        for_each_offset<Dim>([&](const IVec<Dim>& o) {
+          if (!regular) return;
+          const IVec<Dim> b = a + o;
+          for (int j = 0; j < Dim; ++j)
+            if (b[j] < 0 || b[j] >= n) return;  // outside the domain: a wall, no cell
+          const tree::CellId q = graph.find(level, b);
+          if (q == tree::no_cell) regular = false;
+          blocks[i * block + block_index<Dim>(o)] = q;
+        });
+        ok[i] = regular;
+      },
+      256);
+  slot_.assign(graph.cell_capacity(), -1);
+  for (long i = 0; i < m; ++i) {
+    const tree::CellId c = cells[i];
+    if (!ok[i] || slot_[c] >= 0) continue;
+    slot_[c] = static_cast<std::int32_t>(cells_.size());
+    cells_.push_back(c);
+    blocks_.insert(blocks_.end(), blocks.begin() + i * block, blocks.begin() + (i + 1) * block);
+  }
+  faces_table_.assign(cells_.size() * Dim * axis_faces, tree::no_face);
+  parallel_for(
+      n_cells(),
+      [&](long s) {
+        for (int k = 0; k < Dim; ++k)
+          for_each_offset<Dim>([&](const IVec<Dim>& o) {
+            if (o[k] != 0) return;
+            const tree::CellId q = blocks_[s * block + block_index<Dim>(o)];
+            if (q == tree::no_cell) return;
+            for (int side = 0; side < 2; ++side) {
+              int found = 0;
+              tree::FaceId face = tree::no_face;
+              graph.for_each_side_face(q, k, side ? 1 : -1, [&](const tree::SideFace& sf) {
+                face = sf.face;
+                ++found;
+              });
+              LIQUID_VERIFY(found == 1, "UniformPatches: cell {} has {} faces on side {}{} inside a patch", q,
+                            found, side ? '+' : '-', k);
+              IVec<Dim> oo = o;
+              oo[k] = side;
+              faces_table_[(s * Dim + k) * axis_faces + face_index<Dim>(k, oo)] = face;
+            }
+          });
+      },
+      64);
+  face_.assign(graph.face_capacity(), 0);
+  for (tree::CellId c : cells_)
+    for (tree::FaceId f : graph.faces(c)) {
+      if (face_[f]) continue;
+      bool all = true;
+      for (tree::CellId side : graph.face(f).cell) all = all && (side == tree::no_cell || cell(side));
+      if (all) face_[f] = 1;
+    }
+  for (tree::FaceId f = 0; f < graph.face_capacity(); ++f)
+    if (face_[f]) faces_.push_back(f);
+}
+
+template <int Dim>
+Vec<Dim> UniformPatches<Dim>::value(tree::CellId c, const Vec<Dim>& x, std::span<const double> u,
+                                    double* affine) const {
+  const std::int32_t s = slot_[c];
+  const int level = graph_->level(c);
+  const long n = 1L << level;
+  const IVec<Dim>& a = graph_->address(c);
+  const Vec<Dim> lo = graph_->box(c).lo, h = graph_->cell_size(c);
+  Vec<Dim> v;
+  for (int k = 0; k < Dim; ++k) {
+    const Local<Dim> st(lo, h, a, n, k, x);
+    const tree::FaceId* table = faces_table_.data() + (static_cast<long>(s) * Dim + k) * axis_faces;
+    double value = 0.0;
+    Vec<Dim> grad = Vec<Dim>::Zero();
+    for (int corner = 0; corner < (1 << Dim); ++corner) {
+      IVec<Dim> o = st.off;
+      for (int j = 0; j < Dim; ++j) o[j] += (corner >> j) & 1;
+      const tree::FaceId f = table[face_index<Dim>(k, o)];
+      if (f == tree::no_face) continue;  // a lattice line past a wall; its weight is 0
+      value += st.weight(corner) * u[f];
+      if (affine) grad += st.gradient(corner, h) * u[f];
+    }
+    v[k] = value;
+    if (affine)
+      for (int j = 0; j < Dim; ++j) affine[k * Dim + j] = grad[j];
+  }
+  return v;
+}
+
+template <int Dim>
+TransferReport UniformPatches<Dim>::to_faces(const particles::Particles<Dim>& particles,
+                                             const particles::CellBins& bins, std::span<const double> affine,
+                                             FaceValues& out) const {
+  LIQUID_VERIFY(bins.n_particles() == particles.size(), "UniformPatches: bins hold {} particles, there are {}",
+                bins.n_particles(), particles.size());
+  LIQUID_VERIFY(affine.empty() || affine.size() == static_cast<std::size_t>(particles.size()) * Dim * Dim,
+                "UniformPatches: affine field of {} doubles for {} particles", affine.size(), particles.size());
+  LIQUID_VERIFY(static_cast<int>(out.value.size()) >= graph_->face_capacity(),
+                "UniformPatches: {} face values for {} face ids", out.value.size(), graph_->face_capacity());
+  const tree::CellGraph<Dim>& graph = *graph_;
+  TransferReport total;
+  parallel_for(
+      n_faces(), [] { return TransferReport{}; },
+      [&](TransferReport& r, long i) {
+        const tree::FaceId f = faces_[i];
+        const tree::GraphFace& g = graph.face(f);
+        const int k = g.axis;
+        // The face is the lower axis-k side of its upper cell, or the upper side of its lower cell
+        // at the domain's upper wall; the particles its hat reaches are in the two layers of that
+        // cell's block along k.
+        const bool upper = g.cell[1] != tree::no_cell;
+        const tree::CellId ref = upper ? g.cell[1] : g.cell[0];
+        IVec<Dim> af = graph.address(ref);
+        if (!upper) ++af[k];
+        const int level = graph.level(ref);
+        const long n = 1L << level;
+        const Vec<Dim> xf = graph.face_centre(f);
+        const Vec<Dim> h = graph.cell_size(ref);
+        const tree::CellId* blk = blocks_.data() + static_cast<long>(slot_[ref]) * block;
+        double sum = 0.0, mass = 0.0;
+        for_each_offset<Dim>([&](const IVec<Dim>& o) {
+          if (o[k] != (upper ? -1 : 0) && o[k] != (upper ? 0 : 1)) return;
+          const tree::CellId q = blk[block_index<Dim>(o)];
+          if (q == tree::no_cell) return;
+          const IVec<Dim>& aq = graph.address(q);
+          const Vec<Dim> lo = graph.box(q).lo;
+          for (std::int32_t p : bins.of(q)) {
+            const Vec<Dim>& xp = particles.x[p];
+            const Local<Dim> st(lo, h, aq, n, k, xp);
+            int corner = 0;
+            bool inside = true;
+            for (int j = 0; j < Dim; ++j) {
+              const long d = af[j] - aq[j] - st.off[j];
+              inside = inside && (d == 0 || d == 1);
+              corner |= static_cast<int>(d & 1) << j;
+            }
+            if (!inside) continue;
+            const double w = st.weight(corner);
+            if (w == 0.0) continue;
+            double value = particles.v[p][k];
+            if (!affine.empty())
+              for (int j = 0; j < Dim; ++j) value += affine[(p * Dim + k) * Dim + j] * (xf[j] - xp[j]);
+            sum += w * value;
+            mass += w;
+          }
+        });
+        ++r.targets;
+        if (mass > 0.0) {
+          out.value[f] = sum / mass;
+          out.known[f] = 1;
+          out.weight[f] = mass;
+        } else {
+          out.value[f] = 0.0, out.known[f] = 0, out.weight[f] = 0.0;
+          ++r.empty;
+        }
+      },
+      [&](TransferReport& r) { total += r; }, 256);
+  total.max_degree_used = 1;
+  return total;
+}
+
+template <int Dim>
+Eigen::Matrix<double, Dim, Dim> patch_inertia(const tree::CellGraph<Dim>& graph, tree::CellId c, int k,
+                                              const Vec<Dim>& x) {
+  const int level = graph.level(c);
+  LIQUID_VERIFY(level >= 1, "patch_inertia: cell {} is the root; a lattice needs level 1 or finer", c);
+  const IVec<Dim>& a = graph.address(c);
+  const Vec<Dim> lo = graph.box(c).lo, h = graph.cell_size(c);
+  const Local<Dim> st(lo, h, a, 1L << level, k, x);
+  Eigen::Matrix<double, Dim, Dim> d = Eigen::Matrix<double, Dim, Dim>::Zero();
+  for (int corner = 0; corner < (1 << Dim); ++corner) {
+    Vec<Dim> xf;
+    for (int j = 0; j < Dim; ++j)
+      xf[j] = lo[j] + h[j] * (static_cast<double>(st.off[j] + ((corner >> j) & 1)) + (j == k ? 0.0 : 0.5));
+    const Vec<Dim> r = xf - x;
+    d += st.weight(corner) * r * r.transpose();
+  }
+  return d;
+}
+
+template class UniformPatches<2>;
+template class UniformPatches<3>;
+template Eigen::Matrix<double, 2, 2> patch_inertia<2>(const tree::CellGraph<2>&, tree::CellId, int, const Vec<2>&);
+template Eigen::Matrix<double, 3, 3> patch_inertia<3>(const tree::CellGraph<3>&, tree::CellId, int, const Vec<3>&);
+
+}  // namespace liquid::transfer
