@@ -90,7 +90,10 @@ void echo(const scene::Scene<Dim>& s, const scene::RunSettings& settings, bool r
              o.poisson.nullspace == mac::Nullspace::pin ? "; a closed box's PPE pinned at one cell" : "");
   if (rbf_transfer)
     fmt::print("  transfer    {}PHS r^{} + degree {}{}\n",
-               o.adaptive && o.uniform_patches ? "APIC in uniform patches, across level changes " : "",
+               !o.adaptive || !o.uniform_patches ? ""
+               : o.tent_at_level_changes
+                   ? "APIC in uniform patches, particle -> face by tents and face -> particle by "
+                   : "APIC in uniform patches, across level changes ",
                o.rbf.exponent, o.rbf.degree, s.paper_preset ? " (the paper's preset)" : "");
   if (o.reseed && rbf_transfer) {
     const bool holes = (o.reseeding.lo == 0 && o.reseeding.hi == 0) ||

@@ -19,6 +19,7 @@ struct FlowMethod {
   pic::PicTransfer transfer;
   bool paper = false;
   bool rbf_everywhere = false;  ///< adaptive RBF without the uniform patches' APIC transfers
+  bool tent = false;            ///< adaptive RBF with tent particle -> face at level changes
 };
 /// The methods of `all` that --methods names, in the order named (every one when none is named);
 /// throws naming a method that is not one of them.

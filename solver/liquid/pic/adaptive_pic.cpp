@@ -422,8 +422,14 @@ void AdaptivePic<Dim>::to_faces(PicStepReport& r) {
   } else if (affine_particles()) {
     near_cells_ = near_liquid_cells();
     patches_ = std::make_unique<transfer::UniformPatches<Dim>>(graph_, near_cells_);
-    r.p2g = transfer::particles_to_faces<Dim>(graph_, particles_, bins_, options_.rbf, faces,
-                                              patches_->face_mask());
+    if (options_.tent_at_level_changes) {
+      faces.reset(graph_.face_capacity());
+      r.p2g = transfer::tent_to_faces<Dim>(graph_, particles_, bins_, particles_.field(apic_field_),
+                                           patches_->face_mask(), faces);
+    } else {
+      r.p2g = transfer::particles_to_faces<Dim>(graph_, particles_, bins_, options_.rbf, faces,
+                                                patches_->face_mask());
+    }
     r.p2g += patches_->to_faces(particles_, bins_, particles_.field(apic_field_), faces);
     r.patch_cells = patches_->n_cells();
     r.near_cells = static_cast<long>(near_cells_.size());

@@ -110,6 +110,11 @@ struct PicOptions {
   /// transfer = rbf always uses the RBF everywhere (the regular-rbf comparison row). Why:
   /// docs/findings/transfer-stability.md.
   bool uniform_patches = true;
+  /// With uniform_patches: particle -> face outside the patches by tent weights of the face's size
+  /// (APIC's hat, PIC-like where particles carry no C) instead of the RBF. Steadier in a 3D still pool,
+  /// less accurate in a vortex (scene key `[solver] level_change_p2g = "tent"`; measured:
+  /// docs/findings/transfer-stability.md).
+  bool tent_at_level_changes = false;
   particles::Integrator integrator = particles::Integrator::rk2;
   double advect_cfl = 1.0;  ///< advection substeps keep |v| dt_sub <= advect_cfl * finest h
   int extrapolation_layers = 4;

@@ -577,6 +577,7 @@ const std::vector<std::string> solver_keys = {"method",
                                               "transfer_exponent",
                                               "transfer_degree",
                                               "patch_transfer",
+                                              "level_change_p2g",
                                               "preset"};
 
 /// The [solver] keys every method reads: the method, the adaptivity and gravity.
@@ -622,6 +623,10 @@ void read_pic_solver(const TableReader& r, Scene<Dim>& s) {
                 r.where("transfer_exponent"), o.rbf.exponent);
   o.rbf.degree = static_cast<int>(r.integer_in("transfer_degree", 0, 4, o.rbf.degree));
   if (r.has("patch_transfer")) o.uniform_patches = r.choice("patch_transfer", {"apic", "rbf"}) == "apic";
+  o.tent_at_level_changes = r.choice("level_change_p2g", {"rbf", "tent"}, std::string("rbf")) == "tent";
+  LIQUID_VERIFY(!o.tent_at_level_changes || o.uniform_patches,
+                "{}: the tent transfer at level changes goes with patch_transfer = \"apic\"",
+                r.where("level_change_p2g"));
   o.rbf.share_factors = r.boolean("share_factors", true);
   o.rbf.condition_estimate =
       r.choice("condition_estimate", {"probes", "hager-higham"}, std::string("probes")) == "probes"

@@ -272,6 +272,59 @@ TransferReport UniformPatches<Dim>::to_faces(const particles::Particles<Dim>& pa
 }
 
 template <int Dim>
+TransferReport tent_to_faces(const tree::CellGraph<Dim>& graph, const particles::Particles<Dim>& particles,
+                             const particles::CellBins& bins, std::span<const double> affine,
+                             std::span<const std::uint8_t> skip, FaceValues& out) {
+  TransferReport total;
+  parallel_for(
+      graph.face_capacity(), [] { return std::pair<TransferReport, std::vector<tree::CellId>>{}; },
+      [&](auto& st, long fl) {
+        const tree::FaceId f = static_cast<tree::FaceId>(fl);
+        if (!graph.face_alive(f) || skip[f]) return;
+        const tree::GraphFace& g = graph.face(f);
+        const int k = g.axis;
+        const Vec<Dim> xf = graph.face_centre(f);
+        tree::CellId fine = g.side_level[0] >= g.side_level[1] ? g.cell[0] : g.cell[1];
+        const Vec<Dim> h = graph.cell_size(fine);
+        std::vector<tree::CellId> cells, ring;
+        for (tree::CellId c : g.cell) {
+          if (c == tree::no_cell) continue;
+          graph.k_ring(c, 1, ring);
+          cells.insert(cells.end(), ring.begin(), ring.end());
+        }
+        std::sort(cells.begin(), cells.end());
+        cells.erase(std::unique(cells.begin(), cells.end()), cells.end());
+        double sum = 0.0, mass = 0.0;
+        for (tree::CellId q : cells)
+          for (std::int32_t p : bins.of(q)) {
+            const Vec<Dim>& xp = particles.x[p];
+            double w = 1.0;
+            for (int j = 0; j < Dim && w > 0.0; ++j) w *= std::max(0.0, 1.0 - std::abs(xp[j] - xf[j]) / h[j]);
+            if (w <= 0.0) continue;
+            double value = particles.v[p][k];
+            if (!affine.empty())
+              for (int j = 0; j < Dim; ++j) value += affine[(p * Dim + k) * Dim + j] * (xf[j] - xp[j]);
+            sum += w * value;
+            mass += w;
+          }
+        ++st.first.targets;
+        if (mass > 0.0) {
+          out.value[f] = sum / mass, out.known[f] = 1, out.weight[f] = mass;
+        } else {
+          ++st.first.empty;
+        }
+      },
+      [&](auto& st) { total += st.first; }, 256);
+  return total;
+}
+template TransferReport tent_to_faces<2>(const tree::CellGraph<2>&, const particles::Particles<2>&,
+                                         const particles::CellBins&, std::span<const double>,
+                                         std::span<const std::uint8_t>, FaceValues&);
+template TransferReport tent_to_faces<3>(const tree::CellGraph<3>&, const particles::Particles<3>&,
+                                         const particles::CellBins&, std::span<const double>,
+                                         std::span<const std::uint8_t>, FaceValues&);
+
+template <int Dim>
 Eigen::Matrix<double, Dim, Dim> patch_inertia(const tree::CellGraph<Dim>& graph, tree::CellId c, int k,
                                               const Vec<Dim>& x) {
   const int level = graph.level(c);

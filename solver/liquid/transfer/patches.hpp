@@ -67,6 +67,16 @@ template <int Dim>
 Eigen::Matrix<double, Dim, Dim> patch_inertia(const tree::CellGraph<Dim>& graph, tree::CellId c, int k,
                                               const Vec<Dim>& x);
 
+/// Particle -> face at every alive face with skip[f] == 0: the mean of v_p (+ C (x_f - x_p) with
+/// `affine` non-empty) over the particles of the face's cells and their neighbours, weighed by the
+/// tent prod_j max(0, 1 - |x_p,j - x_f,j| / h_j) of the face's level (its finer side's cell size h).
+/// Positive weights: a face's value stays within the range of its particles' (C = 0). `out` must be
+/// sized for the graph; faces skipped are left as they are.
+template <int Dim>
+TransferReport tent_to_faces(const tree::CellGraph<Dim>& graph, const particles::Particles<Dim>& particles,
+                             const particles::CellBins& bins, std::span<const double> affine,
+                             std::span<const std::uint8_t> skip, FaceValues& out);
+
 extern template class UniformPatches<2>;
 extern template class UniformPatches<3>;
 

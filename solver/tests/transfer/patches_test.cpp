@@ -238,5 +238,56 @@ TYPED_TEST(PatchesTest, TheRbfTransferSkipsPatchFacesAndTheVelocityFieldUsesTheP
   EXPECT_GT(other, 0);
 }
 
+TYPED_TEST(PatchesTest, TentWeightsStayInTheParticlesRangeAndReproduceAffineFieldsWithTheirGradient) {
+  constexpr int Dim = TypeParam::value;
+  tree::CellGraphOptions<Dim> options;
+  options.max_jump = 3;
+  const Box<Dim> domain{Vec<Dim>::Constant(-1.0), Vec<Dim>::Constant(1.0)};
+  const auto g = tree::random<Dim>(domain, 17, 2, Dim == 2 ? 6 : 4, 0.3, options);
+  const transfer::UniformPatches<Dim> patches(g, g.cell_ids());
+  auto p = seeded_with_affine<Dim>(g, 3);
+  const int apic = p.find_field("apic");
+  particles::CellBins bins;
+  particles::bin_particles<Dim>(g, p.x, bins);
+  // Random velocities, C = 0: every face within the range of the particles' values.
+  std::mt19937_64 rng(8);
+  std::uniform_real_distribution<double> val(-1.0, 1.0);
+  for (auto& v : p.v)
+    for (int k = 0; k < Dim; ++k) v[k] = val(rng);
+  transfer::FaceValues out;
+  out.reset(g.face_capacity());
+  const transfer::TransferReport r =
+      transfer::tent_to_faces<Dim>(g, p, bins, p.field(apic), patches.face_mask(), out);
+  EXPECT_EQ(r.targets, g.n_faces() - patches.n_faces());
+  EXPECT_EQ(r.empty, 0);
+  std::array<double, Dim> lo, hi;
+  lo.fill(1e300), hi.fill(-1e300);
+  for (const auto& v : p.v)
+    for (int k = 0; k < Dim; ++k) lo[k] = std::min(lo[k], v[k]), hi[k] = std::max(hi[k], v[k]);
+  g.for_each_face([&](tree::FaceId f) {
+    if (patches.face(f)) {
+      EXPECT_FALSE(out.known[f]);
+      return;
+    }
+    const int k = g.face(f).axis;
+    EXPECT_GE(out.value[f], lo[k]);
+    EXPECT_LE(out.value[f], hi[k]);
+  });
+  // An affine field carried with its gradient is reproduced exactly at every face reached.
+  const Affine<Dim> field = some_affine<Dim>();
+  for (int i = 0; i < p.size(); ++i) {
+    p.v[i] = field(p.x[i]);
+    for (int k = 0; k < Dim; ++k)
+      for (int j = 0; j < Dim; ++j) p.field(apic)[(i * Dim + k) * Dim + j] = field.grad(k, j);
+  }
+  out.reset(g.face_capacity());
+  transfer::tent_to_faces<Dim>(g, p, bins, p.field(apic), patches.face_mask(), out);
+  double worst = 0.0;
+  g.for_each_face([&](tree::FaceId f) {
+    if (out.known[f]) worst = std::max(worst, std::abs(out.value[f] - field(g.face_centre(f))[g.face(f).axis]));
+  });
+  EXPECT_LT(worst, 1e-12);
+}
+
 }  // namespace
 }  // namespace liquid
