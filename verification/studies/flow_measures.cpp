@@ -15,7 +15,8 @@
 
 namespace liquid::verification {
 
-std::vector<FlowMethod> chosen_methods(std::span<const FlowMethod> all, const std::vector<std::string>& names) {
+std::vector<FlowMethod> chosen_methods(std::span<const FlowMethod> all,
+                                       const std::vector<std::string>& names) {
   if (names.empty()) return {all.begin(), all.end()};
   std::vector<FlowMethod> out;
   std::vector<std::string> known;
@@ -60,7 +61,8 @@ double affine_energy(const pic::AdaptivePic<Dim>& sim, std::span<const double> w
   const int c = p.find_field("apic");
   if (c < 0) return 0.0;
   if (sim.options().transfer == pic::PicTransfer::apic)
-    return transfer::particle_affine_energy<Dim>(transfer::RegularLattice<Dim>(sim.graph()), p, p.field(c), w);
+    return transfer::particle_affine_energy<Dim>(transfer::RegularLattice<Dim>(sim.graph()), p, p.field(c),
+                                                 w);
   // Adaptive RBF with uniform patches: each particle's C in the lattice of its cell's level.
   const std::span<const double> affine = p.field(c);
   double total = 0.0;
@@ -70,7 +72,8 @@ double affine_energy(const pic::AdaptivePic<Dim>& sim, std::span<const double> w
     if (sim.graph().level(hint) < 1) continue;
     for (int k = 0; k < Dim; ++k) {
       const Vec<Dim> ck = Eigen::Map<const Vec<Dim>>(affine.data() + (i * Dim + k) * Dim);
-      total += 0.5 * (w.empty() ? 1.0 : w[i]) * ck.dot(transfer::patch_inertia<Dim>(sim.graph(), hint, k, p.x[i]) * ck);
+      total += 0.5 * (w.empty() ? 1.0 : w[i]) *
+               ck.dot(transfer::patch_inertia<Dim>(sim.graph(), hint, k, p.x[i]) * ck);
     }
   }
   return total;

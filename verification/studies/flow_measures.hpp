@@ -18,12 +18,13 @@ struct FlowMethod {
   bool adaptive;
   pic::PicTransfer transfer;
   bool paper = false;
-  bool rbf_everywhere = false;  ///< adaptive RBF without the uniform patches' APIC transfers
-  bool tent = false;            ///< adaptive RBF with tent particle -> face at level changes
+  bool patches = false;  ///< adaptive RBF with APIC in uniform patches (PicOptions::uniform_patches)
+  bool tent = false;     ///< ... and tent particle -> face at level changes
 };
 /// The methods of `all` that --methods names, in the order named (every one when none is named);
 /// throws naming a method that is not one of them.
-std::vector<FlowMethod> chosen_methods(std::span<const FlowMethod> all, const std::vector<std::string>& names);
+std::vector<FlowMethod> chosen_methods(std::span<const FlowMethod> all,
+                                       const std::vector<std::string>& names);
 /// The flow studies' methods, side by side: adaptive RBF with the default transfer and reseeding,
 /// the same with the paper's preset, RBF on the uniform tree, and the regular baselines PIC, FLIP and
 /// APIC.

@@ -104,12 +104,13 @@ struct PicOptions {
   PicTransfer transfer = PicTransfer::rbf;
   double flip = 0.95;  ///< FLIP's blend for transfer = flip (1: pure FLIP, 0: PIC)
   transfer::TransferOptions rbf = stable_rbf();
-  /// The RBF transfer on an adaptive tree: APIC's multilinear transfers inside uniform patches
-  /// (transfer::UniformPatches), the RBF only where a stencil meets a level change. false: the RBF
-  /// everywhere, as the paper (scene key `[solver] patch_transfer = "rbf"`). A uniform tree with
-  /// transfer = rbf always uses the RBF everywhere (the regular-rbf comparison row). Why:
-  /// docs/findings/transfer-stability.md.
-  bool uniform_patches = true;
+  /// The RBF transfer on an adaptive tree: true takes APIC's multilinear transfers inside uniform
+  /// patches (transfer::UniformPatches) and the RBF only where a stencil meets a level change (scene
+  /// key `[solver] patch_transfer = "apic"`); false, the default and the paper's, the RBF everywhere.
+  /// The patches slow a 3D still pool's noise growth and run faster, but lose accuracy in a vortex,
+  /// so they are not the default. A uniform tree with transfer = rbf always uses the RBF everywhere
+  /// (the regular-rbf comparison row). Measured: docs/findings/transfer-stability.md.
+  bool uniform_patches = false;
   /// With uniform_patches: particle -> face outside the patches by tent weights of the face's size
   /// (APIC's hat, PIC-like where particles carry no C) instead of the RBF. Steadier in a 3D still pool,
   /// less accurate in a vortex (scene key `[solver] level_change_p2g = "tent"`; measured:

@@ -7,6 +7,7 @@
 
 #include "liquid/core/error.hpp"
 #include "liquid/core/parallel.hpp"
+#include "liquid/transfer/regular.hpp"
 
 namespace liquid::transfer {
 
@@ -59,24 +60,9 @@ struct Local {
       }
     }
   }
-  double weight(int corner) const {
-    double w = 1.0;
-    for (int j = 0; j < Dim; ++j) w *= (corner >> j) & 1 ? t[j] : 1.0 - t[j];
-    return w;
-  }
+  double weight(int corner) const { return multilinear_weight<Dim>(t, corner); }
   Vec<Dim> gradient(int corner, const Vec<Dim>& h) const {
-    Vec<Dim> g;
-    for (int j = 0; j < Dim; ++j) {
-      if (clamped[j]) {
-        g[j] = 0.0;
-        continue;
-      }
-      double w = ((corner >> j) & 1 ? 1.0 : -1.0) / h[j];
-      for (int i = 0; i < Dim; ++i)
-        if (i != j) w *= (corner >> i) & 1 ? t[i] : 1.0 - t[i];
-      g[j] = w;
-    }
-    return g;
+    return multilinear_gradient<Dim>(t, clamped, corner, h);
   }
 };
 
@@ -203,10 +189,11 @@ template <int Dim>
 TransferReport UniformPatches<Dim>::to_faces(const particles::Particles<Dim>& particles,
                                              const particles::CellBins& bins, std::span<const double> affine,
                                              FaceValues& out) const {
-  LIQUID_VERIFY(bins.n_particles() == particles.size(), "UniformPatches: bins hold {} particles, there are {}",
-                bins.n_particles(), particles.size());
+  LIQUID_VERIFY(bins.n_particles() == particles.size(),
+                "UniformPatches: bins hold {} particles, there are {}", bins.n_particles(), particles.size());
   LIQUID_VERIFY(affine.empty() || affine.size() == static_cast<std::size_t>(particles.size()) * Dim * Dim,
-                "UniformPatches: affine field of {} doubles for {} particles", affine.size(), particles.size());
+                "UniformPatches: affine field of {} doubles for {} particles", affine.size(),
+                particles.size());
   LIQUID_VERIFY(static_cast<int>(out.value.size()) >= graph_->face_capacity(),
                 "UniformPatches: {} face values for {} face ids", out.value.size(), graph_->face_capacity());
   const tree::CellGraph<Dim>& graph = *graph_;
@@ -345,7 +332,9 @@ Eigen::Matrix<double, Dim, Dim> patch_inertia(const tree::CellGraph<Dim>& graph,
 
 template class UniformPatches<2>;
 template class UniformPatches<3>;
-template Eigen::Matrix<double, 2, 2> patch_inertia<2>(const tree::CellGraph<2>&, tree::CellId, int, const Vec<2>&);
-template Eigen::Matrix<double, 3, 3> patch_inertia<3>(const tree::CellGraph<3>&, tree::CellId, int, const Vec<3>&);
+template Eigen::Matrix<double, 2, 2> patch_inertia<2>(const tree::CellGraph<2>&, tree::CellId, int,
+                                                      const Vec<2>&);
+template Eigen::Matrix<double, 3, 3> patch_inertia<3>(const tree::CellGraph<3>&, tree::CellId, int,
+                                                      const Vec<3>&);
 
 }  // namespace liquid::transfer

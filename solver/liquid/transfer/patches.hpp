@@ -27,13 +27,15 @@ namespace liquid::transfer {
 template <int Dim>
 class UniformPatches {
  public:
-  static constexpr int block = Dim == 2 ? 9 : 27;             ///< cells of a 3^Dim block
-  static constexpr int axis_faces = Dim == 2 ? 6 : 18;        ///< 2 x 3^(Dim-1) axis-k faces of a block
+  static constexpr int block = Dim == 2 ? 9 : 27;       ///< cells of a 3^Dim block
+  static constexpr int axis_faces = Dim == 2 ? 6 : 18;  ///< 2 x 3^(Dim-1) axis-k faces of a block
   /// The patch cells among `cells` (alive cells, any order; typically those near the particles) and
   /// the patch faces around them. Uses OpenMP.
   UniformPatches(const tree::CellGraph<Dim>& graph, std::span<const tree::CellId> cells);
 
-  bool cell(tree::CellId c) const { return c >= 0 && c < static_cast<tree::CellId>(slot_.size()) && slot_[c] >= 0; }
+  bool cell(tree::CellId c) const {
+    return c >= 0 && c < static_cast<tree::CellId>(slot_.size()) && slot_[c] >= 0;
+  }
   bool face(tree::FaceId f) const { return face_[f] != 0; }
   /// Per face id: 1 for a patch face.
   std::span<const std::uint8_t> face_mask() const { return face_; }
@@ -42,7 +44,8 @@ class UniformPatches {
 
   /// The velocity at x (inside patch cell c, or on its boundary) from the face values u; with
   /// `affine` non-null, APIC's C (Dim x Dim, row-major) is written there.
-  Vec<Dim> value(tree::CellId c, const Vec<Dim>& x, std::span<const double> u, double* affine = nullptr) const;
+  Vec<Dim> value(tree::CellId c, const Vec<Dim>& x, std::span<const double> u,
+                 double* affine = nullptr) const;
 
   /// Particle -> face at every patch face: the hat-weighted mean of v_p (+ C (x_f - x_p) with
   /// `affine` non-empty: Dim*Dim doubles per particle). Writes out.value, out.known and out.weight
@@ -54,7 +57,7 @@ class UniformPatches {
   const tree::CellGraph<Dim>* graph_ = nullptr;
   std::vector<std::int32_t> slot_;  // per cell id: index into cells_, or -1
   std::vector<tree::CellId> cells_;
-  std::vector<tree::CellId> blocks_;  // per patch cell: its 3^Dim block (no_cell outside the domain)
+  std::vector<tree::CellId> blocks_;       // per patch cell: its 3^Dim block (no_cell outside the domain)
   std::vector<tree::FaceId> faces_table_;  // per patch cell: Dim x axis_faces faces (no_face outside)
   std::vector<std::uint8_t> face_;
   std::vector<tree::FaceId> faces_;

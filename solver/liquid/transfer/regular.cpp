@@ -115,14 +115,25 @@ LinearStencil<Dim>::LinearStencil(const RegularLattice<Dim>& lattice, int k, con
 }
 
 template <int Dim>
-double LinearStencil<Dim>::weight(int corner) const {
+double multilinear_weight(const Vec<Dim>& t, int corner) {
   double w = 1.0;
   for (int j = 0; j < Dim; ++j) w *= (corner >> j) & 1 ? t[j] : 1.0 - t[j];
   return w;
 }
 
 template <int Dim>
+double LinearStencil<Dim>::weight(int corner) const {
+  return multilinear_weight<Dim>(t, corner);
+}
+
+template <int Dim>
 Vec<Dim> LinearStencil<Dim>::gradient(int corner, const Vec<Dim>& h) const {
+  return multilinear_gradient<Dim>(t, clamped, corner, h);
+}
+
+template <int Dim>
+Vec<Dim> multilinear_gradient(const Vec<Dim>& t, const std::array<bool, Dim>& clamped, int corner,
+                              const Vec<Dim>& h) {
   Vec<Dim> g;
   for (int j = 0; j < Dim; ++j) {
     if (clamped[j]) {
@@ -322,6 +333,8 @@ Eigen::Vector3d face_angular_momentum(const tree::CellGraph<Dim>& graph, const F
 
 #define LIQUID_REGULAR(D)                                                                                  \
   template class RegularLattice<D>;                                                                        \
+  template double multilinear_weight<D>(const Vec<D>&, int);                                               \
+  template Vec<D> multilinear_gradient<D>(const Vec<D>&, const std::array<bool, D>&, int, const Vec<D>&);  \
   template struct LinearStencil<D>;                                                                        \
   template TransferReport linear_to_faces<D>(const tree::CellGraph<D>&, const RegularLattice<D>&,          \
                                              const particles::Particles<D>&, const particles::CellBins&,   \

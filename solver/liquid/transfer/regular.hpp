@@ -61,6 +61,14 @@ class RegularLattice {
   std::array<std::vector<tree::FaceId>, Dim> faces_;
 };
 
+/// Weight of corner `corner` (bit j: +1 along axis j) of a multilinear stencil with fractions t.
+template <int Dim>
+double multilinear_weight(const Vec<Dim>& t, int corner);
+/// Its gradient on a lattice of spacing h; 0 along the clamped axes.
+template <int Dim>
+Vec<Dim> multilinear_gradient(const Vec<Dim>& t, const std::array<bool, Dim>& clamped, int corner,
+                              const Vec<Dim>& h);
+
 /// The multilinear stencil of a point for component k: base lattice address and fractions.
 template <int Dim>
 struct LinearStencil {

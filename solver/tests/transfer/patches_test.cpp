@@ -185,7 +185,8 @@ TYPED_TEST(PatchesTest, OnNonGradedTreesTheyAreExactlyTheUniformBlocksAndReprodu
     worst_back = std::max(worst_back, (patches.value(bins.cell[i], p.x[i], u, c) - field(p.x[i])).norm());
     ++checked;
     for (int k = 0; k < Dim; ++k)
-      for (int j = 0; j < Dim; ++j) worst_grad = std::max(worst_grad, std::abs(c[k * Dim + j] - field.grad(k, j)));
+      for (int j = 0; j < Dim; ++j)
+        worst_grad = std::max(worst_grad, std::abs(c[k * Dim + j] - field.grad(k, j)));
   }
   EXPECT_GT(checked, 0);
   EXPECT_LT(worst_back, 1e-12);
@@ -211,7 +212,8 @@ TYPED_TEST(PatchesTest, TheRbfTransferSkipsPatchFacesAndTheVelocityFieldUsesTheP
   o.exponent = 3, o.degree = 1;
   transfer::FaceValues all, skipped;
   transfer::particles_to_faces<Dim>(g, p, bins, o, all);
-  const transfer::TransferReport r = transfer::particles_to_faces<Dim>(g, p, bins, o, skipped, patches.face_mask());
+  const transfer::TransferReport r =
+      transfer::particles_to_faces<Dim>(g, p, bins, o, skipped, patches.face_mask());
   EXPECT_EQ(r.targets, g.n_faces() - patches.n_faces());
   g.for_each_face([&](tree::FaceId f) {
     if (patches.face(f))
@@ -284,7 +286,8 @@ TYPED_TEST(PatchesTest, TentWeightsStayInTheParticlesRangeAndReproduceAffineFiel
   transfer::tent_to_faces<Dim>(g, p, bins, p.field(apic), patches.face_mask(), out);
   double worst = 0.0;
   g.for_each_face([&](tree::FaceId f) {
-    if (out.known[f]) worst = std::max(worst, std::abs(out.value[f] - field(g.face_centre(f))[g.face(f).axis]));
+    if (out.known[f])
+      worst = std::max(worst, std::abs(out.value[f] - field(g.face_centre(f))[g.face(f).axis]));
   });
   EXPECT_LT(worst, 1e-12);
 }

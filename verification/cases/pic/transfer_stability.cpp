@@ -7,20 +7,19 @@
 // and the projection do to it. Rows: the uniform tree and the adaptive one (finest level in the
 // central region [pi/4, 3pi/4]^Dim with the band's hops, one level coarser elsewhere: vorticity's
 // tree), each with the paper's transfer (PHS r^5 with degree 2, both directions) and with PHS r^3
-// with degree 1, the RBF everywhere; the adaptive tree also with the default (APIC in uniform
-// patches, PHS r^3 + degree 1 across level changes); 2D at finest level 5, 3D at 4; 40 steps (full
-// tier: 160). No reseeding (the particles do not move).
-// Measured: the particles' L-inf velocity error (the largest component) after the first step,
-// half-way and after the last (warned about past 0.1 of the peak speed). Every row's error grows:
-// the RBF pair does not smooth, so each step's interpolation error stays; the paper's pair in 3D
-// grows it geometrically instead; the faces' L-inf error after the
-// last step, the particles' kinetic energy over its value at seeding (volume-weighted shares,
-// particle_volumes), and the largest Lebesgue constant of the face -> particle stencils over the tree's cells
-// (the largest sum of |cardinal function| over each cell's corners, edge and face centres and centre: how
-// much an error in the face values can grow at a particle). Expected (asserted): the 2D rows and the 3D rows
-// with PHS r^3 + degree 1 keep the error below 0.3 (a flow of peak speed 1). Gated: the error after the last
-// step, per row. The paper's transfer in 3D is reported and warned about, since its error grows without
-// bound (docs/findings/transfer-stability.md).
+// with degree 1, the RBF everywhere; the adaptive tree also with APIC in its uniform patches and PHS
+// r^3 + degree 1 across level changes (PicOptions::uniform_patches); 2D at finest level 5, 3D at 4; 40 steps
+// (full tier: 160). No reseeding (the particles do not move). Measured: the particles' L-inf velocity error
+// (the largest component) after the first step, half-way and after the last (warned about past 0.1 of the
+// peak speed). Every row's error grows: the RBF pair does not smooth, so each step's interpolation error
+// stays; the paper's pair in 3D grows it geometrically instead; the faces' L-inf error after the last step,
+// the particles' kinetic energy over its value at seeding (volume-weighted shares, particle_volumes), and the
+// largest Lebesgue constant of the face -> particle stencils over the tree's cells (the largest sum of
+// |cardinal function| over each cell's corners, edge and face centres and centre: how much an error in the
+// face values can grow at a particle). Expected (asserted): the 2D rows and the 3D rows with PHS r^3 + degree
+// 1 keep the error below 0.3 (a flow of peak speed 1). Gated: the error after the last step, per row. The
+// paper's transfer in 3D is reported and warned about, since its error grows without bound
+// (docs/findings/transfer-stability.md).
 
 #include <cmath>
 
@@ -48,7 +47,7 @@ struct Transfer {
 };
 constexpr Transfer kTransfers[] = {{"PHS r^5 + degree 2 (paper)", 5, 2, false},
                                    {"PHS r^3 + degree 1", 3, 1, false},
-                                   {"APIC in patches, PHS r^3 + degree 1 (default)", 3, 1, true}};
+                                   {"APIC in patches, PHS r^3 + degree 1", 3, 1, true}};
 
 struct Row {
   double error_first = 0, error_half = 0, error_last = 0, face_error = 0, energy = 0, lebesgue = 0,
@@ -142,8 +141,8 @@ void rows(const CaseOptions& options, Table& table, CaseResult& result) {
       table.add_row({long(Dim), tree, std::string(t.name), long(level), r.cells, r.particles, long(steps),
                      r.error_first, r.error_half, r.error_last, r.error_last / r.error_half, r.face_error,
                      r.energy, r.lebesgue, r.seconds});
-      const std::string key =
-          fmt::format("{}D {} r^{} degree {}{}", Dim, tree, t.exponent, t.degree, t.patches ? " patches" : "");
+      const std::string key = fmt::format("{}D {} r^{} degree {}{}", Dim, tree, t.exponent, t.degree,
+                                          t.patches ? " patches" : "");
       result.gate.push_back({key + " particle error after the steps", GateFigure::Kind::error, r.error_last});
       result.expect(std::isfinite(r.error_last), key + ": a non-finite velocity");
       if (Dim == 2 || t.exponent == 3)
