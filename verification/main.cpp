@@ -25,6 +25,7 @@
 #include "common/case.hpp"
 #include "common/gate.hpp"
 #include "common/record.hpp"
+#include "liquid/io/files.hpp"
 #include "liquid/core/error.hpp"
 #include "liquid/core/threads.hpp"
 #include "liquid/core/timer.hpp"
@@ -144,6 +145,7 @@ int main(int argc, char** argv) {
                     case_name);
       if (run->count("--json")) lv::check_output_path("--json", json_path);
       if (run->count("--md")) lv::check_output_path("--md", md_path);
+      liquid::io::check_distinct_outputs({{"--json", json_path}, {"--md", md_path}});
       const lv::CaseOptions options = lv::case_options(flags, *info);
       fmt::print("{}\n", lv::echo(case_name, flags));
       fmt::print("  threads: {}\n", liquid::thread_summary());
@@ -183,6 +185,7 @@ int main(int argc, char** argv) {
       user.nullspace_given = poisson->count("--nullspace") > 0;
       if (poisson->count("--json")) lv::check_output_path("--json", user_json);
       if (poisson->count("--md")) lv::check_output_path("--md", user_md);
+      liquid::io::check_distinct_outputs({{"--json", user_json}, {"--md", user_md}});
       const std::string command = lv::describe(user);
       fmt::print("{}\n", command);
       fmt::print("  threads: {}\n", liquid::thread_summary());

@@ -23,6 +23,7 @@
 #include <fstream>
 #include <limits>
 
+#include "liquid/io/files.hpp"
 #include "liquid/core/error.hpp"
 #include "liquid/core/threads.hpp"
 #include "liquid/linalg/solver.hpp"
@@ -258,17 +259,6 @@ void print_summary(const scene::RunSummary& s, const std::string& name, int dim)
   fmt::print("  wall time {:.2f} s\n", s.wall);
 }
 
-void write_text(const std::string& path, const std::string& text) {
-  const std::string tmp = path + ".tmp";
-  {
-    std::ofstream out(tmp, std::ios::trunc);
-    out << text;
-    out.close();
-    LIQUID_VERIFY(out.good(), "cannot write {}", tmp);
-  }
-  LIQUID_VERIFY(std::rename(tmp.c_str(), path.c_str()) == 0, "cannot rename {} to {}", tmp, path);
-}
-
 /// The process's peak resident memory so far, in MB (getrusage; Linux reports kB).
 double peak_memory_mb() {
   rusage usage{};
@@ -289,7 +279,7 @@ void write_json(const std::string& path, const scene::RunSummary& s, const std::
       "  \"seconds_per_step\": {{{}}}\n}}\n",
       name, dim, s.steps, s.time, s.threads, s.fluid_cells, s.cells, s.particles, s.regular_cells,
       s.regular_particles, s.ppe_iterations, s.ppe_failures, s.ppe_reused, s.wall, peak_memory_mb(), phases);
-  write_text(path, text);
+  liquid::io::write_text_file(path, text);
 }
 
 /// The paper's Table 1 columns (Adams et al. 2007, Sec. 6) and every phase.
@@ -333,7 +323,7 @@ void write_sph_json(const std::string& path, const scene::SphRunSummary& s, cons
     phases += fmt::format("{}\"{}\": {:.6g}", phases.empty() ? "" : ", ", phase, t);
   for (std::size_t l = 0; l < s.per_level.size(); ++l)
     levels += fmt::format("{}{:.6g}", l ? ", " : "", s.per_level[l]);
-  write_text(
+  liquid::io::write_text_file(
       path,
       fmt::format(
           "{{\n  \"scene\": \"{}\", \"method\": \"sph\", \"dimension\": {}, \"steps\": {}, \"time\": {:.9g}, "
@@ -546,6 +536,9 @@ int main(int argc, char** argv) {
           "--spacing, --surface, --solver, --amg-reuse, --paper, --steps and --until are refused with it");
     LIQUID_VERIFY(a.checkpoint_every == 0 || !a.out.empty(),
                   "liquid run: --checkpoint-every needs an output folder (--out DIR)");
+    // Every output is checked before any work, so that a run cannot fail at its end for a path.
+    if (run->count("--out")) liquid::io::check_output_folder("--out", a.out);
+    if (run->count("--json")) liquid::io::check_output_file("--json", a.json);
     int dim = 0;
     std::string path;
     if (a.resume.empty()) {

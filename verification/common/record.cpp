@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 
 #include "liquid/core/error.hpp"
+#include "liquid/io/files.hpp"
 
 namespace liquid::verification {
 
@@ -67,38 +68,11 @@ std::string result_markdown(const std::string& name, const std::string& summary,
 }
 
 void check_output_path(const std::string& flag, const std::string& path) {
-  namespace fs = std::filesystem;
-  LIQUID_VERIFY(!path.empty(), "{}: the path is empty", flag);
-  const fs::path target(path);
-  LIQUID_VERIFY(!fs::is_directory(target), "{}: '{}' is a folder, not a file", flag, path);
-  LIQUID_VERIFY(target.has_filename(), "{}: '{}' names no file", flag, path);
-  std::error_code ec;
-  const fs::path folder = target.has_parent_path() ? target.parent_path() : fs::path(".");
-  fs::create_directories(folder, ec);
-  LIQUID_VERIFY(!ec && fs::is_directory(folder), "{}: cannot create the folder '{}' of '{}': {}", flag,
-                folder.string(), path, ec ? ec.message() : "not a folder");
+  io::check_output_file(flag, path);
 }
 
 void write_file(const std::string& path, const std::string& text) {
-  namespace fs = std::filesystem;
-  const fs::path target(path);
-  std::error_code ec;
-  if (target.has_parent_path()) fs::create_directories(target.parent_path(), ec);
-  LIQUID_VERIFY(!ec, "cannot create the folder of '{}': {}", path, ec.message());
-  const fs::path tmp = target.string() + ".part";
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    LIQUID_VERIFY(out.good(), "cannot open '{}' for writing", tmp.string());
-    out << text;
-    out.flush();
-    LIQUID_VERIFY(out.good(), "writing '{}' failed (disk full?)", tmp.string());
-  }
-  fs::rename(tmp, target, ec);
-  if (ec) {
-    std::error_code ignored;
-    fs::remove(tmp, ignored);
-  }
-  LIQUID_VERIFY(!ec, "cannot move '{}' to '{}': {}", tmp.string(), path, ec.message());
+  io::write_text_file(path, text);
 }
 
 }  // namespace liquid::verification

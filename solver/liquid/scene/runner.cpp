@@ -228,16 +228,21 @@ void apply_overrides(const SceneOverrides& o, Scene<Dim>& scene) {
     p.coarse_level = std::clamp(p.coarse_level + shift, 0, p.finest_level);
   }
   if (o.steps >= 0) {
-    LIQUID_VERIFY(o.steps >= 1, "--steps {} must be at least 1", o.steps);
+    LIQUID_VERIFY(o.steps >= 1 && o.steps <= kMaxSteps, "--steps {} is outside [1, {}]", o.steps, kMaxSteps);
     scene.time.steps = o.steps;
     scene.time.end = std::numeric_limits<double>::infinity();
   }
   if (!(o.until < 0)) {  // a negative time keeps the scene's end; NaN is refused below
     LIQUID_VERIFY(o.until > 0 && std::isfinite(o.until), "--until {} must be a positive time", o.until);
+    LIQUID_VERIFY(o.until / scene.time.dt_max <= static_cast<double>(kMaxSteps),
+                  "--until {} s needs at least {:.3g} steps of the scene's dt_max = {} s, more than a run may "
+                  "take ({})",
+                  o.until, o.until / scene.time.dt_max, scene.time.dt_max, kMaxSteps);
     scene.time.end = o.until;
     scene.time.steps = -1;
   }
   if (scene.sph) sph_options<Dim>(scene);  // refuses what the SPH solver cannot run
+  check_sph_table<Dim>(scene);
 }
 
 template <int Dim>

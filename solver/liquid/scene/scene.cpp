@@ -6,6 +6,7 @@
 
 #include <toml++/toml.h>
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -682,7 +683,7 @@ void read_time(const TableReader& top, Scene<Dim>& s) {
   LIQUID_VERIFY(r.has("end") || r.has("steps"), "{}: give 'time.end' (seconds) or 'time.steps'",
                 r.where_table());
   if (r.has("end")) s.time.end = r.positive("end");
-  if (r.has("steps")) s.time.steps = r.integer_in("steps", 1, 100000000);
+  if (r.has("steps")) s.time.steps = r.integer_in("steps", 1, kMaxSteps);
   // SPH's step is bounded by the speed of sound (AdaptiveSph::stable_dt): a lower bound on dt would
   // override it, so its default is far below any stable step.
   s.time.cfl = r.positive("cfl", s.sph ? 0.25 : 1.0);
@@ -690,6 +691,28 @@ void read_time(const TableReader& top, Scene<Dim>& s) {
   s.time.dt_min = r.positive("dt_min", std::min(s.sph ? 1e-9 : 1e-5, s.time.dt_max));
   LIQUID_VERIFY(s.time.dt_min <= s.time.dt_max, "{}: dt_min {} exceeds dt_max {}", r.where("dt_min"),
                 s.time.dt_min, s.time.dt_max);
+  if (r.has("end"))
+    LIQUID_VERIFY(std::isfinite(s.time.end) && s.time.end / s.time.dt_max <= static_cast<double>(kMaxSteps),
+                  "{}: {} s needs at least {:.3g} steps of dt_max = {} s, more than a run may take ({}); "
+                  "shorten it or raise time.dt_max",
+                  r.where("end"), s.time.end, s.time.end / s.time.dt_max, s.time.dt_max, kMaxSteps);
+}
+
+/// A scene's name is a file stem: it names the output files, inside the output folder.
+bool is_file_stem(const std::string& name) {
+  if (name.empty() || name.size() > 200 || name.front() == '.' || name.front() == '-') return false;
+  return std::all_of(name.begin(), name.end(), [](char c) {
+    return std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_' || c == '.' || c == '+';
+  });
+}
+
+/// The default name: the scene file's stem, with every character a stem may not hold replaced by '_'.
+std::string stem_of(const std::string& path) {
+  std::string stem = std::filesystem::path(path).stem().string();
+  for (char& c : stem)
+    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_' || c == '.' || c == '+')) c = '_';
+  while (!stem.empty() && (stem.front() == '.' || stem.front() == '-')) stem.erase(stem.begin());
+  return stem.empty() ? std::string("scene") : stem;
 }
 
 /// [ppe]: the PIC solver's pressure solve.
@@ -828,7 +851,11 @@ Scene<Dim> load_scene(const std::string& path) {
                          "output", "fluid", "solid", "source"});
   Scene<Dim> s;
   s.path = path;
-  s.name = top.string("name", std::filesystem::path(path).stem().string());
+  s.name = top.string("name", stem_of(path));
+  LIQUID_VERIFY(is_file_stem(s.name),
+                "{}: '{}' is not a file stem: a scene's name names its output files, so it takes letters, "
+                "digits, '-', '_', '.' and '+' only, and does not start with '.' or '-'",
+                top.where("name"), s.name);
   s.description = top.string("description", std::string());
   s.figure = top.string("figure", std::string());
   read_domain<Dim>(top, s);
@@ -838,7 +865,11 @@ Scene<Dim> load_scene(const std::string& path) {
     read_pic_solver<Dim>(solver, s);
   }
   read_grid<Dim>(top, s);
-  if (const toml::table* t = top.table("sph")) read_sph<Dim>(TableReader(*t, path, "sph", sph_keys), s);
+  if (const toml::table* t = top.table("sph")) {
+    const TableReader sph(*t, path, "sph", sph_keys);
+    s.sph_table = sph.where_table();
+    read_sph<Dim>(sph, s);
+  }
   read_time<Dim>(top, s);
   read_ppe<Dim>(top, s);
   read_output<Dim>(top, s);
@@ -847,6 +878,16 @@ Scene<Dim> load_scene(const std::string& path) {
   if (s.sph) sph_options<Dim>(s);  // refuses what the SPH solver cannot run, naming the key
   return s;
 }
+
+template <int Dim>
+void check_sph_table(const Scene<Dim>& s) {
+  LIQUID_VERIFY(s.sph || s.sph_table.empty(),
+                "{}: the [sph] table is read only by the SPH solver (solver.method = \"sph\" or --method sph); "
+                "this run is '{}', which would ignore it",
+                s.sph_table, to_string(s.pic.transfer));
+}
+template void check_sph_table<2>(const Scene<2>&);
+template void check_sph_table<3>(const Scene<3>&);
 
 linalg::SolverKind default_ppe_solver(bool adaptive, int dim) {
   if (!adaptive) return linalg::SolverKind::cg_jacobi;

@@ -21,6 +21,9 @@
 namespace liquid::scene {
 
 /// When a run ends and how its steps are sized.
+/// The most steps a run may take (scene key time.steps, --steps; time.end and --until by dt_max).
+inline constexpr long kMaxSteps = 100000000;
+
 struct SceneTime {
   double end = std::numeric_limits<double>::infinity();  ///< simulated seconds
   long steps = -1;                                       ///< or a step count (-1: by `end`)
@@ -101,6 +104,9 @@ struct Scene {
   bool grid_given = false;        ///< the file has a [grid] table (PIC methods need it)
   bool sph = false;               ///< solver.method = "sph": the adaptive SPH solver runs it
   bool paper_preset = false;      ///< solver.preset = "paper" (PicOptions::apply_paper_preset)
+  /// Where the scene's [sph] table is ("FILE:LINE: [sph]"), or "" without one: a run that is not SPH
+  /// (after --method) refuses it, since it would be ignored.
+  std::string sph_table;
   SphScene<Dim> sph_scene;
   Box<Dim> liquid_bounds;          ///< the bounding box of the [[fluid]] shapes that add liquid
   double max_initial_speed = 0.0;  ///< the fastest [[fluid]] velocity given
@@ -133,6 +139,10 @@ linalg::SolverKind default_ppe_solver(bool adaptive, int dim);
 /// 2 or 3, from domain.lo of the file (throws as load_scene does on a file that cannot be read).
 int scene_dimension(const std::string& path);
 /// Reads and checks a scene file; dimension must be Dim.
+/// Refuses a scene whose [sph] table its method would ignore (Scene::sph_table).
+template <int Dim>
+void check_sph_table(const Scene<Dim>& s);
+
 template <int Dim>
 Scene<Dim> load_scene(const std::string& path);
 
