@@ -25,10 +25,10 @@
 #include "common/case.hpp"
 #include "common/gate.hpp"
 #include "common/record.hpp"
-#include "liquid/io/files.hpp"
 #include "liquid/core/error.hpp"
 #include "liquid/core/threads.hpp"
 #include "liquid/core/timer.hpp"
+#include "liquid/io/files.hpp"
 #include "options.hpp"
 #include "user_poisson.hpp"
 

@@ -23,9 +23,9 @@
 #include <fstream>
 #include <limits>
 
-#include "liquid/io/files.hpp"
 #include "liquid/core/error.hpp"
 #include "liquid/core/threads.hpp"
+#include "liquid/io/files.hpp"
 #include "liquid/linalg/solver.hpp"
 #include "liquid/scene/runner.hpp"
 #include "liquid/scene/sph_runner.hpp"
@@ -90,12 +90,14 @@ void echo(const scene::Scene<Dim>& s, const scene::RunSettings& settings, bool r
                  : "",
              o.poisson.nullspace == mac::Nullspace::pin ? "; a closed box's PPE pinned at one cell" : "");
   if (rbf_transfer)
-    fmt::print("  transfer    {}PHS r^{} + degree {}{}\n",
+    fmt::print("  transfer    {}PHS r^{} + degree {}{}{}\n",
                !o.adaptive || !o.uniform_patches ? ""
                : o.tent_at_level_changes
                    ? "APIC in uniform patches, particle -> face by tents and face -> particle by "
                    : "APIC in uniform patches, across level changes ",
-               o.rbf.exponent, o.rbf.degree, s.paper_preset ? " (the paper's preset)" : "");
+               o.rbf.exponent, o.rbf.degree,
+               o.adaptive && o.uniform_patches && o.rbf_gradient_affine ? " (its gradient as APIC's C)" : "",
+               s.paper_preset ? " (the paper's preset)" : "");
   if (o.reseed && rbf_transfer) {
     const bool holes = (o.reseeding.lo == 0 && o.reseeding.hi == 0) ||
                        (o.reseeding.lo == 1 && o.reseeding.hi == std::numeric_limits<int>::max());

@@ -18,8 +18,8 @@ struct FlowMethod {
   bool adaptive;
   pic::PicTransfer transfer;
   bool paper = false;
-  bool patches = false;  ///< adaptive RBF with APIC in uniform patches (PicOptions::uniform_patches)
-  bool tent = false;     ///< ... and tent particle -> face at level changes
+  bool everywhere = false;  ///< adaptive RBF with the RBF everywhere (no uniform patches)
+  bool tent = false;        ///< adaptive RBF with tent particle -> face at level changes
 };
 /// The methods of `all` that --methods names, in the order named (every one when none is named);
 /// throws naming a method that is not one of them.

@@ -22,8 +22,8 @@ void writable_folder(const std::string& option, const fs::path& folder, const st
   fs::create_directories(folder, ec);
   LIQUID_VERIFY(!ec && fs::is_directory(folder), "{}: cannot create the folder '{}'{}: {}", option,
                 folder.string(), what, ec ? ec.message() : "a file of that name is in the way");
-  LIQUID_VERIFY(::access(folder.c_str(), W_OK | X_OK) == 0, "{}: the folder '{}'{} is not writable: {}", option,
-                folder.string(), what, std::strerror(errno));
+  LIQUID_VERIFY(::access(folder.c_str(), W_OK | X_OK) == 0, "{}: the folder '{}'{} is not writable: {}",
+                option, folder.string(), what, std::strerror(errno));
 }
 
 }  // namespace

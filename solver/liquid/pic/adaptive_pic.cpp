@@ -93,6 +93,10 @@ tree::CellGraph<Dim> initial_graph(const PicOptions<Dim>& o) {
   LIQUID_VERIFY(o.projection == PicProjection::volume || o.transfer != PicTransfer::rbf,
                 "PIC: the {} projection needs a regular transfer (pic, flip or apic) on a uniform tree",
                 to_string(o.projection));
+  LIQUID_VERIFY(
+      !(o.tent_at_level_changes && o.rbf_gradient_affine && o.uniform_patches),
+      "PIC: the tent particle -> face at level changes with the RBF gradient as the particles' C is "
+      "unstable (a 2D still pool blew up); take one of them");
   LIQUID_VERIFY(o.min_face_mass > 0.0 && o.min_face_mass <= 1.0, "PIC: min_face_mass {} is outside (0, 1]",
                 o.min_face_mass);
   return tree::uniform<Dim>(o.domain, o.adaptive ? o.coarse_level : o.finest_level, graph_options(o));
@@ -227,6 +231,8 @@ void AdaptivePic<Dim>::restore(const PicState<Dim>& s) {
   LIQUID_VERIFY(
       s.field_names.size() == s.field_components.size() && s.field_names.size() == s.field_values.size(),
       "PIC: the saved particle fields are incomplete");
+  LIQUID_VERIFY(std::isfinite(s.time) && s.time >= 0.0 && s.step >= 0,
+                "PIC: the saved clock (step {}, time {}) is not a run's", s.step, s.time);
   graph_ = std::move(graph);
   solid_.clear();
   lattice_.reset();
@@ -764,6 +770,10 @@ void AdaptivePic<Dim>::to_particles(PicStepReport& r) {
         [&](long i) {
           if (patches_ && patches_->cell(bins_.cell[i])) {
             grid[i] = patches_->value(bins_.cell[i], particles_.x[i], u_, affine.data() + i * Dim * Dim);
+            return;
+          }
+          if (!affine.empty() && options_.rbf_gradient_affine) {
+            grid[i] = field_->with_gradient(particles_.x[i], affine.data() + i * Dim * Dim);
             return;
           }
           grid[i] = (*field_)(particles_.x[i]);

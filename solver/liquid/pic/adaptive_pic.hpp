@@ -105,17 +105,21 @@ struct PicOptions {
   double flip = 0.95;  ///< FLIP's blend for transfer = flip (1: pure FLIP, 0: PIC)
   transfer::TransferOptions rbf = stable_rbf();
   /// The RBF transfer on an adaptive tree: true takes APIC's multilinear transfers inside uniform
-  /// patches (transfer::UniformPatches) and the RBF only where a stencil meets a level change (scene
-  /// key `[solver] patch_transfer = "apic"`); false, the default and the paper's, the RBF everywhere.
-  /// The patches slow a 3D still pool's noise growth and run faster, but lose accuracy in a vortex,
-  /// so they are not the default. A uniform tree with transfer = rbf always uses the RBF everywhere
+  /// patches (transfer::UniformPatches) and the RBF only where a stencil meets a level change; false,
+  /// the paper's (scene key `[solver] patch_transfer = "rbf"`), the RBF everywhere. With the RBF
+  /// gradient as C outside the patches (below) a 3D still pool's noise grows far more slowly and a
+  /// vortex keeps its accuracy. A uniform tree with transfer = rbf always uses the RBF everywhere
   /// (the regular-rbf comparison row). Measured: docs/findings/transfer-stability.md.
-  bool uniform_patches = false;
+  bool uniform_patches = true;
   /// With uniform_patches: particle -> face outside the patches by tent weights of the face's size
   /// (APIC's hat, PIC-like where particles carry no C) instead of the RBF. Steadier in a 3D still pool,
   /// less accurate in a vortex (scene key `[solver] level_change_p2g = "tent"`; measured:
   /// docs/findings/transfer-stability.md).
   bool tent_at_level_changes = false;
+  /// With uniform_patches: the particles outside the patches take the RBF interpolant's gradient as
+  /// APIC's C (0 where a value was clamped) instead of C = 0, so their particle -> face keeps the
+  /// flow's affine part there too (scene key `[solver] affine_outside_patches = "zero"` sets C = 0).
+  bool rbf_gradient_affine = true;
   particles::Integrator integrator = particles::Integrator::rk2;
   double advect_cfl = 1.0;  ///< advection substeps keep |v| dt_sub <= advect_cfl * finest h
   int extrapolation_layers = 4;

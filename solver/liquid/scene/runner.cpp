@@ -6,7 +6,9 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <filesystem>
+#include <fstream>
 
 #include "liquid/core/error.hpp"
 #include "liquid/io/archive.hpp"
@@ -67,8 +69,19 @@ namespace {
 constexpr char grid_separator = '\x1e';  // between the grids of one frame in a checkpoint
 }  // namespace
 
+/// FNV-1a over the scene file's bytes: what a checkpoint keeps to know its scene again.
+std::string scene_fingerprint(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  LIQUID_VERIFY(in.good(), "cannot read the scene file {}", path);
+  std::uint64_t h = 0xcbf29ce484222325ULL;
+  char c = 0;
+  while (in.get(c)) h = (h ^ static_cast<unsigned char>(c)) * 0x100000001b3ULL;
+  return fmt::format("{:016x}", h);
+}
+
 void put_run_settings(io::ArchiveWriter& w, const RunSettings& settings, const std::string& scene_path) {
   w.put_string("scene/path", std::filesystem::absolute(scene_path).string());
+  w.put_string("scene/fingerprint", scene_fingerprint(scene_path));
   const SceneOverrides& o = settings.overrides;
   w.put_string("overrides/method", o.method.empty() ? "-" : o.method);
   w.put_scalar("overrides/adaptive", static_cast<std::int64_t>(o.adaptive));
@@ -97,6 +110,12 @@ void get_run_settings(const io::ArchiveReader& r, RunSettings& settings) {
   LIQUID_VERIFY(std::filesystem::is_regular_file(settings.scene_path),
                 "{}: its scene file {} is gone; a checkpoint needs the scene it was made from", r.path(),
                 settings.scene_path);
+  // Checkpoints written before the fingerprint existed resume as before.
+  if (r.has("scene/fingerprint"))
+    LIQUID_VERIFY(r.string("scene/fingerprint") == scene_fingerprint(settings.scene_path),
+                  "{}: its scene file {} has changed since the checkpoint was written; resuming would mix "
+                  "two scenes (restore the file, or start the new scene afresh)",
+                  r.path(), settings.scene_path);
 }
 
 void put_series(io::ArchiveWriter& w, const io::SeriesWriter* series) {
@@ -234,10 +253,11 @@ void apply_overrides(const SceneOverrides& o, Scene<Dim>& scene) {
   }
   if (!(o.until < 0)) {  // a negative time keeps the scene's end; NaN is refused below
     LIQUID_VERIFY(o.until > 0 && std::isfinite(o.until), "--until {} must be a positive time", o.until);
-    LIQUID_VERIFY(o.until / scene.time.dt_max <= static_cast<double>(kMaxSteps),
-                  "--until {} s needs at least {:.3g} steps of the scene's dt_max = {} s, more than a run may "
-                  "take ({})",
-                  o.until, o.until / scene.time.dt_max, scene.time.dt_max, kMaxSteps);
+    LIQUID_VERIFY(
+        o.until / scene.time.dt_max <= static_cast<double>(kMaxSteps),
+        "--until {} s needs at least {:.3g} steps of the scene's dt_max = {} s, more than a run may "
+        "take ({})",
+        o.until, o.until / scene.time.dt_max, scene.time.dt_max, kMaxSteps);
     scene.time.end = o.until;
     scene.time.steps = -1;
   }

@@ -579,6 +579,7 @@ const std::vector<std::string> solver_keys = {"method",
                                               "transfer_degree",
                                               "patch_transfer",
                                               "level_change_p2g",
+                                              "affine_outside_patches",
                                               "preset"};
 
 /// The [solver] keys every method reads: the method, the adaptivity and gravity.
@@ -628,6 +629,17 @@ void read_pic_solver(const TableReader& r, Scene<Dim>& s) {
   LIQUID_VERIFY(!o.tent_at_level_changes || o.uniform_patches,
                 "{}: the tent transfer at level changes goes with patch_transfer = \"apic\"",
                 r.where("level_change_p2g"));
+  if (o.tent_at_level_changes) o.rbf_gradient_affine = false;  // together they blow up a 2D pool
+  if (r.has("affine_outside_patches")) {
+    o.rbf_gradient_affine = r.choice("affine_outside_patches", {"zero", "rbf-gradient"}) == "rbf-gradient";
+    LIQUID_VERIFY(o.uniform_patches,
+                  "{}: the particles' affine part outside the patches goes with patch_transfer = \"apic\"",
+                  r.where("affine_outside_patches"));
+    LIQUID_VERIFY(!(o.rbf_gradient_affine && o.tent_at_level_changes),
+                  "{}: \"rbf-gradient\" with level_change_p2g = \"tent\" is unstable (a 2D still pool blew "
+                  "up); use \"zero\" with the tents",
+                  r.where("affine_outside_patches"));
+  }
   o.rbf.share_factors = r.boolean("share_factors", true);
   o.rbf.condition_estimate =
       r.choice("condition_estimate", {"probes", "hager-higham"}, std::string("probes")) == "probes"
@@ -710,7 +722,8 @@ bool is_file_stem(const std::string& name) {
 std::string stem_of(const std::string& path) {
   std::string stem = std::filesystem::path(path).stem().string();
   for (char& c : stem)
-    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_' || c == '.' || c == '+')) c = '_';
+    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_' || c == '.' || c == '+'))
+      c = '_';
   while (!stem.empty() && (stem.front() == '.' || stem.front() == '-')) stem.erase(stem.begin());
   return stem.empty() ? std::string("scene") : stem;
 }
@@ -881,10 +894,11 @@ Scene<Dim> load_scene(const std::string& path) {
 
 template <int Dim>
 void check_sph_table(const Scene<Dim>& s) {
-  LIQUID_VERIFY(s.sph || s.sph_table.empty(),
-                "{}: the [sph] table is read only by the SPH solver (solver.method = \"sph\" or --method sph); "
-                "this run is '{}', which would ignore it",
-                s.sph_table, to_string(s.pic.transfer));
+  LIQUID_VERIFY(
+      s.sph || s.sph_table.empty(),
+      "{}: the [sph] table is read only by the SPH solver (solver.method = \"sph\" or --method sph); "
+      "this run is '{}', which would ignore it",
+      s.sph_table, to_string(s.pic.transfer));
 }
 template void check_sph_table<2>(const Scene<2>&);
 template void check_sph_table<3>(const Scene<3>&);

@@ -130,6 +130,37 @@ Vec<Dim> FaceVelocityField<Dim>::operator()(const Vec<Dim>& x) const {
   return evaluate(local, y);
 }
 
+template <int Dim>
+Vec<Dim> FaceVelocityField<Dim>::with_gradient(const Vec<Dim>& x, double* grad) const {
+  LIQUID_VERIFY(x.allFinite(), "FaceVelocityField: non-finite evaluation point");
+  LIQUID_VERIFY(lattice_ == nullptr, "FaceVelocityField: with_gradient is for adaptive trees");
+  const Box<Dim>& d = graph_->domain();
+  const Vec<Dim> y = x.cwiseMax(d.lo).cwiseMin(d.hi);
+  const tree::CellId c = graph_->locate(y);
+  if (patches_ && patches_->cell(c)) return patches_->value(c, y, u_, grad);
+  CellInterpolants local;
+  const CellInterpolants* ci = &local;
+  if (slot_[c] >= 0)
+    ci = prepared_[slot_[c]].get();
+  else
+    prepare(c, local);
+  Vec<Dim> v;
+  for (int k = 0; k < Dim; ++k) {
+    std::fill_n(grad + k * Dim, Dim, 0.0);
+    if (ci->empty[k]) {
+      v[k] = 0.0;
+      continue;
+    }
+    const double raw = ci->interp[k] ? ci->interp[k]->value_at(y) : ci->fallback[k];
+    const double value = options_.clamp ? std::clamp(raw, ci->lo[k], ci->hi[k]) : raw;
+    v[k] = value;
+    if (!ci->interp[k] || value != raw) continue;
+    const Eigen::MatrixXd g = ci->interp[k]->gradient(y);
+    for (int j = 0; j < Dim; ++j) grad[k * Dim + j] = g(j, 0);
+  }
+  return v;
+}
+
 template class FaceVelocityField<2>;
 template class FaceVelocityField<3>;
 

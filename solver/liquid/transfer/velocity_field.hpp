@@ -42,6 +42,10 @@ class FaceVelocityField {
 
   /// The velocity at x (clamped onto the domain). Throws on a non-finite x.
   Vec<Dim> operator()(const Vec<Dim>& x) const;
+  /// The velocity at x and its gradient written to `grad` (Dim x Dim, row-major, row k the gradient
+  /// of component k: APIC's C): the multilinear one in patch cells, the RBF interpolant's elsewhere,
+  /// 0 for a component whose value was clamped or whose interpolant is unusable. Adaptive trees only.
+  Vec<Dim> with_gradient(const Vec<Dim>& x, double* grad) const;
 
  private:
   struct CellInterpolants;

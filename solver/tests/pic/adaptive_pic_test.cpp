@@ -47,6 +47,19 @@ TEST(AdaptivePic, StillPoolStaysStill2D) {
   }
 }
 
+TEST(AdaptivePic, ARestoredClockThatNoRunCouldHaveIsRefusedAndChangesNothing) {
+  pic::AdaptivePic<2> sim = pool<2>(true, pic::PicTransfer::rbf, 4);
+  sim.advance(0.01);
+  const pic::PicState<2> good = sim.state();
+  for (auto [step, time] : {std::pair{-100L, 0.01}, std::pair{1L, std::nan("")}, std::pair{1L, -1.0}}) {
+    pic::PicState<2> bad = good;
+    bad.step = step, bad.time = time;
+    EXPECT_THROW(sim.restore(bad), Error) << step << " " << time;
+    EXPECT_EQ(sim.steps(), 1);
+    EXPECT_EQ(sim.time(), 0.01);
+  }
+}
+
 TEST(AdaptivePic, DamBreakRunsStableAndSpreads2D) {
   // A column of liquid collapses: the front must advance, the speed stay below free fall from
   // the column's height (with margin), and nothing become NaN; adaptive RBF and regular APIC.

@@ -45,9 +45,10 @@ struct Transfer {
   int exponent, degree;
   bool patches;  ///< APIC in the adaptive tree's uniform patches (PicOptions::uniform_patches)
 };
-constexpr Transfer kTransfers[] = {{"PHS r^5 + degree 2 (paper)", 5, 2, false},
-                                   {"PHS r^3 + degree 1", 3, 1, false},
-                                   {"APIC in patches, PHS r^3 + degree 1", 3, 1, true}};
+constexpr Transfer kTransfers[] = {
+    {"PHS r^5 + degree 2 (paper)", 5, 2, false},
+    {"PHS r^3 + degree 1", 3, 1, false},
+    {"APIC in patches, PHS r^3 + degree 1 and its gradient (default)", 3, 1, true}};
 
 struct Row {
   double error_first = 0, error_half = 0, error_last = 0, face_error = 0, energy = 0, lebesgue = 0,
