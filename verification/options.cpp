@@ -225,6 +225,7 @@ void add_user_poisson_flags(CLI::App& app, UserPoissonArgs& a) {
   app.add_option("--expect-order", a.expect_order,
                  "P[,G]: exit 1 when the fitted order of p (and of dp/dn) falls below");
   app.add_option("--expect-error", a.expect_error, "exit 1 when the finest row's L-inf error of p exceeds E")
+      ->check(finite_number)
       ->check(CLI::PositiveNumber);
   app.add_option("--max-cells", a.max_cells, kMaxCellsHelp)->check(CLI::Range(1L, 1'000'000'000'000L));
 }

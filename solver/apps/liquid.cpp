@@ -38,6 +38,7 @@ struct Args {
   std::string scene, out, json, resume;
   scene::SceneOverrides overrides;
   long checkpoint_every = 0;
+  double memory_gb = 0.0;  ///< --memory: the PIC memory budget in GB (0: half the machine's memory)
   bool regular = false, adaptive = false, no_frames = false, quiet = false;
 };
 
@@ -261,6 +262,25 @@ void print_summary(const scene::RunSummary& s, const std::string& name, int dim)
   fmt::print("  wall time {:.2f} s\n", s.wall);
 }
 
+/// This machine's physical memory, in bytes.
+double machine_memory() {
+  const long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGE_SIZE);
+  return pages > 0 && page > 0 ? static_cast<double>(pages) * static_cast<double>(page) : 16e9;
+}
+
+/// Refuses, before anything is built, a PIC run whose start is estimated above the memory budget.
+template <int Dim>
+void check_memory_budget(const scene::Scene<Dim>& s, double memory_gb) {
+  const scene::PicSize size = scene::estimate_pic_size<Dim>(s);
+  const double budget = memory_gb > 0.0 ? memory_gb * 1e9 : machine_memory();
+  LIQUID_VERIFY(size.bytes <= budget,
+                "{}: at finest level {} the run would start with about {:.3g} particles and {:.3g} cells, "
+                "about {:.3g} GB, over the budget of {:.3g} GB ({}); a smaller grid.finest (--finest) runs, "
+                "--memory GB raises the budget",
+                s.path, s.pic.finest_level, size.particles, size.cells, size.bytes / 1e9, budget / 1e9,
+                memory_gb > 0.0 ? "--memory" : "this machine's memory");
+}
+
 /// The process's peak resident memory so far, in MB (getrusage; Linux reports kB).
 double peak_memory_mb() {
   rusage usage{};
@@ -381,6 +401,9 @@ int run_sph(const Args& a, const std::string& scene_path, scene::Scene<Dim>* loa
     echo_sph<Dim>(*loaded, settings, false);
     try {
       run = std::make_unique<scene::SphSceneRunner<Dim>>(std::move(*loaded), settings);
+    } catch (const InputError& e) {
+      throw Error(fmt::format("{}: the [[fluid]] shapes, less the solids, leave the run no liquid: {}",
+                              scene_path, e.what()));
     } catch (const Error& e) {
       throw RunFailure{fmt::format("seeding failed: {}", e.what())};
     }
@@ -404,9 +427,13 @@ int run_scene(const Args& a, const std::string& scene_path) {
     scene::Scene<Dim> scene = scene::load_scene<Dim>(scene_path);
     scene::apply_overrides<Dim>(a.overrides, scene);
     if (scene.sph) return run_sph<Dim>(a, scene_path, &scene);
+    check_memory_budget<Dim>(scene, a.memory_gb);
     echo<Dim>(scene, settings, false);
     try {
       run = std::make_unique<scene::SceneRunner<Dim>>(std::move(scene), settings);
+    } catch (const InputError& e) {
+      throw Error(fmt::format("{}: the [[fluid]] shapes, less the solids, leave the run no liquid: {}",
+                              scene_path, e.what()));
     } catch (const Error& e) {
       throw RunFailure{fmt::format("seeding failed: {}", e.what())};
     }
@@ -504,6 +531,10 @@ int main(int argc, char** argv) {
       ->check(CLI::ExistingFile);
   run->add_flag("--no-frames", a.no_frames, "write no frames (checkpoints still)");
   run->add_flag("--quiet", a.quiet, "no progress lines");
+  run->add_option("--memory", a.memory_gb,
+                  "PIC: refuse a run estimated to need more than GB gigabytes at its start (default: this "
+                  "machine's memory)")
+      ->check(CLI::PositiveNumber);
 
   try {
     app.parse(argc, argv);

@@ -11,10 +11,18 @@
 
 namespace liquid {
 
-/// The one exception type of the library. what() is a complete sentence for the user.
+/// The library's exception type. what() is a complete sentence for the user.
 class Error : public std::runtime_error {
  public:
   explicit Error(const std::string& message) : std::runtime_error(message) {}
+};
+
+/// An Error that is the input's although work had begun to find it (a scene whose liquid holds no
+/// sample point once the tree is built): the programs report it as bad input (exit 2), not as a
+/// failed run.
+class InputError : public Error {
+ public:
+  using Error::Error;
 };
 
 namespace detail {
@@ -32,6 +40,9 @@ inline std::string source_path(const char* file) {
 [[noreturn]] inline void fail(const char* file, int line, const std::string& message) {
   throw Error(fmt::format("{} ({}:{})", message, source_path(file), line));
 }
+[[noreturn]] inline void fail_input(const char* file, int line, const std::string& message) {
+  throw InputError(fmt::format("{} ({}:{})", message, source_path(file), line));
+}
 }  // namespace detail
 
 }  // namespace liquid
@@ -39,6 +50,12 @@ inline std::string source_path(const char* file) {
 #define LIQUID_VERIFY(cond, ...)                                                       \
   do {                                                                                 \
     if (!(cond)) ::liquid::detail::fail(__FILE__, __LINE__, fmt::format(__VA_ARGS__)); \
+  } while (false)
+
+/// LIQUID_VERIFY for a condition on the input that only work can reveal: throws InputError.
+#define LIQUID_VERIFY_INPUT(cond, ...)                                                       \
+  do {                                                                                       \
+    if (!(cond)) ::liquid::detail::fail_input(__FILE__, __LINE__, fmt::format(__VA_ARGS__)); \
   } while (false)
 
 #ifdef NDEBUG

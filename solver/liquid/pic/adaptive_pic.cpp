@@ -149,7 +149,7 @@ void AdaptivePic<Dim>::seed(const levelset::Function<Dim>& liquid,
   const levelset::Function<Dim> region =
       options_.solid ? levelset::subtract<Dim>(liquid, options_.solid) : liquid;
   const long n = particles::seed_region<Dim>(graph_, region, particles::SeedOptions{}, particles_, source);
-  LIQUID_VERIFY(n > 0, "PIC: the liquid region holds no cell's sample point: nothing to simulate");
+  LIQUID_VERIFY_INPUT(n > 0, "PIC: the liquid region holds no cell's sample point: nothing to simulate");
   particles::bin_particles<Dim>(graph_, particles_.x, bins_);
   u_.assign(graph_.face_capacity(), 0.0);
   known_.assign(graph_.face_capacity(), 1);

@@ -893,6 +893,55 @@ Scene<Dim> load_scene(const std::string& path) {
 }
 
 template <int Dim>
+PicSize estimate_pic_size(const Scene<Dim>& s) {
+  const pic::PicOptions<Dim>& o = s.pic;
+  const Vec<Dim> size = s.domain.size();
+  const double domain_volume = s.domain.volume();
+  const double fine_cell = std::ldexp(domain_volume, -Dim * o.finest_level);
+  // The liquid's volume, and on a tree the volume of the band around its surface, by sampling the
+  // liquid's level set (less the solids) on a lattice of the domain.
+  const int n = Dim == 2 ? 256 : 48;
+  const double h = std::ldexp(size.maxCoeff(), -o.finest_level);
+  const double width = (o.band + 1) * h;  // the band's half width around the surface
+  // A band thinner than the lattice is measured at the lattice's spacing and scaled down (the
+  // surface's area times the width), so that it never vanishes between the samples.
+  const double spacing = size.maxCoeff() / n, reach = std::max(width, spacing);
+  long total = 1;
+  for (int k = 0; k < Dim; ++k) total *= n;
+  long inside = 0, band = 0, band_inside = 0;
+  if (s.liquid) {
+    for (long i = 0; i < total; ++i) {
+      Vec<Dim> x;
+      for (long k = 0, r = i; k < Dim; ++k, r /= n)
+        x[k] = s.domain.lo[k] + size[k] * (static_cast<double>(r % n) + 0.5) / n;
+      if (s.solid && s.solid(x) < 0.0) continue;
+      const double phi = s.liquid(x);
+      inside += phi < 0.0;
+      band += std::abs(phi) < reach;
+      band_inside += phi < 0.0 && phi > -reach;
+    }
+  }
+  const double liquid_volume = domain_volume * static_cast<double>(inside) / static_cast<double>(total);
+  PicSize out;
+  if (!s.adaptive) {
+    out.cells = std::ldexp(1.0, Dim * o.finest_level);
+    out.particles = (1 << Dim) * liquid_volume / fine_cell;
+    out.bytes = 300.0 * (out.particles + out.cells);
+    return out;
+  }
+  const double scale = domain_volume * width / reach / static_cast<double>(total);
+  const double band_volume = scale * static_cast<double>(band);
+  const double band_liquid = std::min(scale * static_cast<double>(band_inside), liquid_volume);
+  const double coarse_cell = std::ldexp(domain_volume, -Dim * o.coarse_level);
+  out.particles = (1 << Dim) * (band_liquid / fine_cell + (liquid_volume - band_liquid) / coarse_cell);
+  out.cells = band_volume / fine_cell + domain_volume / coarse_cell;
+  out.bytes = 600.0 * out.particles + 3000.0 * out.cells;
+  return out;
+}
+template PicSize estimate_pic_size<2>(const Scene<2>&);
+template PicSize estimate_pic_size<3>(const Scene<3>&);
+
+template <int Dim>
 void check_sph_table(const Scene<Dim>& s) {
   LIQUID_VERIFY(
       s.sph || s.sph_table.empty(),

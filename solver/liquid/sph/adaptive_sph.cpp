@@ -298,8 +298,8 @@ void AdaptiveSph<Dim>::seed(const levelset::Function<Dim>& liquid, const Vec<Dim
     while (d < Dim && ++k[d] >= n[d]) k[d] = 0, ++d;
     if (d == Dim) break;
   }
-  LIQUID_VERIFY(p_.size() > 0,
-                "sph: the liquid region holds no lattice point of spacing {} inside the container", s);
+  LIQUID_VERIFY_INPUT(p_.size() > 0,
+                      "sph: the liquid region holds no lattice point of spacing {} inside the container", s);
   if (!options_.adaptive) return;
   for (int round = 0; round < 2 * options_.max_level + 2; ++round) {
     const SphStepReport r = adapt_now();

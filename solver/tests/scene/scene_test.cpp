@@ -161,6 +161,38 @@ TEST(Scene, OutputFieldsAndTheRegularGridsSolverAreRead) {
   EXPECT_EQ(tree.pic.solver.kind, linalg::SolverKind::bicgstab_ilut);
 }
 
+TEST(Scene, TheMemoryEstimateHoldsTheSeededParticlesAndGrowsWithTheLevel) {
+  // On a uniform grid the estimate counts the particles the seeding makes (within the sampling's
+  // error); on a tree it bounds them; one level finer multiplies it by about 2^Dim (uniform).
+  for (const char* name : {"dam-break-2d", "drop-2d", "dam-break-obstacles-2d"})
+    for (int adaptive : {0, 1}) {
+      scene::SceneOverrides o;
+      o.finest = 6;
+      o.steps = 1;
+      o.adaptive = adaptive;
+      if (!adaptive) o.method = "apic";
+      scene::Scene<2> scene = scene::load_scene<2>(scene::find_scene(name));
+      scene::apply_overrides<2>(o, scene);
+      const scene::PicSize size = scene::estimate_pic_size<2>(scene);
+      scene::RunSettings settings;
+      settings.overrides = o;
+      settings.scene_path = scene::find_scene(name);
+      const scene::SceneRunner<2> run(scene, settings);
+      const double seeded = run.solver().particles().size();
+      if (adaptive) {
+        EXPECT_GE(size.particles, seeded) << name;
+        EXPECT_LT(size.particles, 4.0 * seeded) << name;
+      } else {
+        EXPECT_NEAR(size.particles / seeded, 1.0, 0.1) << name;
+      }
+      o.finest = 7;
+      scene::Scene<2> finer = scene::load_scene<2>(scene::find_scene(name));
+      scene::apply_overrides<2>(o, finer);
+      if (!adaptive)
+        EXPECT_NEAR(scene::estimate_pic_size<2>(finer).particles / size.particles, 4.0, 0.2) << name;
+    }
+}
+
 TEST(Scene, ResumedRunEndsBitForBitLikeTheUninterruptedOne) {
   for (const char* name : {"dam-break-obstacles-2d", "two-sources-2d"}) {
     const std::string path = scene::find_scene(name);
