@@ -553,6 +553,7 @@ int main(int argc, char** argv) {
         fmt::print("{:<26} {}\n", name, description);
       return 0;
     }
+    LIQUID_VERIFY(std::isfinite(a.memory_gb), "--memory: {} is not a number of gigabytes", a.memory_gb);
     if (a.regular) a.overrides.adaptive = 0;
     if (a.adaptive) a.overrides.adaptive = 1;
     LIQUID_VERIFY(!a.scene.empty() || !a.resume.empty(),

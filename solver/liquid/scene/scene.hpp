@@ -142,9 +142,9 @@ int scene_dimension(const std::string& path);
 /// What a PIC run of the scene will hold at its start, estimated from the scene alone (no tree is
 /// built): the liquid's volume and, on a tree, the band around its surface, sampled from the level
 /// sets on a lattice of the domain; 2^Dim particles a liquid cell (fine in the band, coarse inside);
-/// and bytes at about 300 B a particle and a cell on a uniform grid (regular APIC at 2^-7: 1.3-2.1 GB
-/// for 4M particles and 2M cells), 600 B a particle and 3 kB a cell on a tree (RBF stencils), an
-/// upper estimate (docs/findings/table1-scale.md). Sources add liquid later and are not counted.
+/// and bytes per particle and per cell, larger on a tree (its RBF stencils), set above the peak
+/// memory measured at 2^-7 so that the estimate bounds it (docs/findings/table1-scale.md). Sources add liquid
+/// later and are not counted.
 struct PicSize {
   double particles = 0, cells = 0, bytes = 0;
 };

@@ -66,6 +66,12 @@ struct Local {
   }
 };
 
+/// A thread's buffers for tent_to_faces: the face's cells, one cell's ring, the counts.
+struct TentScratch {
+  std::vector<tree::CellId> cells, ring;
+  TransferReport report;
+};
+
 /// Calls fn(o) for every offset of a 3^Dim block.
 template <int Dim, class Fn>
 void for_each_offset(Fn&& fn) {
@@ -264,8 +270,8 @@ TransferReport tent_to_faces(const tree::CellGraph<Dim>& graph, const particles:
                              std::span<const std::uint8_t> skip, FaceValues& out) {
   TransferReport total;
   parallel_for(
-      graph.face_capacity(), [] { return std::pair<TransferReport, std::vector<tree::CellId>>{}; },
-      [&](auto& st, long fl) {
+      graph.face_capacity(), [] { return TentScratch{}; },
+      [&](TentScratch& st, long fl) {
         const tree::FaceId f = static_cast<tree::FaceId>(fl);
         if (!graph.face_alive(f) || skip[f]) return;
         const tree::GraphFace& g = graph.face(f);
@@ -273,7 +279,9 @@ TransferReport tent_to_faces(const tree::CellGraph<Dim>& graph, const particles:
         const Vec<Dim> xf = graph.face_centre(f);
         tree::CellId fine = g.side_level[0] >= g.side_level[1] ? g.cell[0] : g.cell[1];
         const Vec<Dim> h = graph.cell_size(fine);
-        std::vector<tree::CellId> cells, ring;
+        std::vector<tree::CellId>& cells = st.cells;
+        std::vector<tree::CellId>& ring = st.ring;
+        cells.clear();
         for (tree::CellId c : g.cell) {
           if (c == tree::no_cell) continue;
           graph.k_ring(c, 1, ring);
@@ -294,14 +302,14 @@ TransferReport tent_to_faces(const tree::CellGraph<Dim>& graph, const particles:
             sum += w * value;
             mass += w;
           }
-        ++st.first.targets;
+        ++st.report.targets;
         if (mass > 0.0) {
           out.value[f] = sum / mass, out.known[f] = 1, out.weight[f] = mass;
         } else {
-          ++st.first.empty;
+          ++st.report.empty;
         }
       },
-      [&](auto& st) { total += st.first; }, 256);
+      [&](TentScratch& st) { total += st.report; }, 256);
   return total;
 }
 template TransferReport tent_to_faces<2>(const tree::CellGraph<2>&, const particles::Particles<2>&,
