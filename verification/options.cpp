@@ -32,8 +32,10 @@ const std::map<std::string, linalg::SolverKind> solver_names = [] {
 const std::map<std::string, mac::StencilRule> stencil_names =
     names_of({mac::StencilRule::nearest, mac::StencilRule::face_grown, mac::StencilRule::ring});
 const std::map<std::string, RowProtocol> row_names = names_of({RowProtocol::refine, RowProtocol::rebuild});
-const std::map<std::string, mac::Nullspace> nullspace_names{{"pin", mac::Nullspace::pin},
-                                                            {"zero-mean", mac::Nullspace::zero_mean}};
+const std::map<std::string, NullspaceChoice> nullspace_names =
+    names_of({NullspaceChoice::pin, NullspaceChoice::pin_point, NullspaceChoice::zero_mean});
+const std::map<std::string, AlgebraicControl> algebraic_names =
+    names_of({AlgebraicControl::tighten, AlgebraicControl::check, AlgebraicControl::off});
 const std::map<std::string, Perturbation> perturb_names{{"first-order", Perturbation::first_order}};
 
 // CLI::Range lets NaN through (every comparison with it is false), so the real-valued flags are
@@ -53,6 +55,15 @@ std::string name_of(const std::map<std::string, E>& names, E value) {
     if (v == value) return k;
   return "?";
 }
+
+const char* const kNullspaceHelp =
+    "pure Neumann Poisson studies: pin (default: one unknown near the centre pinned to the exact value, "
+    "the discrete incompatibility then spread as a uniform source), pin-point (the paper's: left at the "
+    "pinned cell, a point source) or zero-mean (a bordered system)";
+const char* const kAlgebraicHelp =
+    "Poisson studies: keep the solver's error out of the errors reported. tighten (default): continue "
+    "each solve to 100x tighter tolerances until the solution moves by under 1% of the row's error; "
+    "check: continue once and report that share only; off: no second solve";
 
 }  // namespace
 
@@ -110,13 +121,13 @@ void add_study_flags(CLI::App& app, StudyFlags& f) {
                  "Poisson studies: refine the first row's tree uniformly (the paper's recursive subdivision) "
                  "or rebuild each row's tree by its rule")
       ->transform(CLI::CheckedTransformer(row_names));
-  app.add_option(
-         "--nullspace", f.nullspace,
-         "pure Neumann Poisson studies: pin one unknown near the centre to the exact value, or zero mean")
+  app.add_option("--nullspace", f.nullspace, kNullspaceHelp)
       ->transform(CLI::CheckedTransformer(nullspace_names));
   app.add_option("--tolerance", f.tolerance, "relative residual the linear solver must reach")
       ->check(finite_number)
       ->check(CLI::Range(1e-16, 0.5));
+  app.add_option("--algebraic", f.algebraic, kAlgebraicHelp)
+      ->transform(CLI::CheckedTransformer(algebraic_names));
   app.add_option("--perturb", f.perturb, "run a deliberately degraded scheme (first-order)")
       ->transform(CLI::CheckedTransformer(perturb_names));
   app.add_option("--trees", f.trees_dir, "write the trees the case checks to DIR as HDF5 + XDMF (ParaView)")
@@ -129,10 +140,10 @@ void add_study_flags(CLI::App& app, StudyFlags& f) {
 
 CaseOptions case_options(const StudyFlags& f, const CaseInfo& info) {
   std::vector<std::string> refused;
-  for (Option o :
-       {Option::levels, Option::max_jump, Option::solver, Option::stencil, Option::rbf_exponent,
-        Option::rbf_degree, Option::gradient_degree, Option::stencil_growth, Option::ring_cap, Option::rows,
-        Option::nullspace, Option::tolerance, Option::perturb, Option::trees, Option::methods})
+  for (Option o : {Option::levels, Option::max_jump, Option::solver, Option::stencil, Option::rbf_exponent,
+                   Option::rbf_degree, Option::gradient_degree, Option::stencil_growth, Option::ring_cap,
+                   Option::rows, Option::nullspace, Option::tolerance, Option::algebraic, Option::perturb,
+                   Option::trees, Option::methods})
     if (f.given(o) && !info.accepts_option(o)) refused.push_back(flag_of(o));
   if (!refused.empty()) {
     std::vector<std::string> accepted;
@@ -165,6 +176,7 @@ CaseOptions case_options(const StudyFlags& f, const CaseInfo& info) {
   if (f.given(Option::rows)) o.rows = f.rows;
   if (f.given(Option::nullspace)) o.nullspace = f.nullspace;
   if (f.given(Option::tolerance)) o.tolerance = f.tolerance;
+  if (f.given(Option::algebraic)) o.algebraic = f.algebraic;
   if (f.given(Option::perturb)) o.perturb = f.perturb;
   if (f.given(Option::trees)) o.trees_dir = f.trees_dir;
   if (f.given(Option::methods)) {
@@ -193,6 +205,7 @@ std::string echo(const std::string& case_name, const StudyFlags& f) {
   s += show(Option::rows, name_of(row_names, f.rows));
   s += show(Option::nullspace, name_of(nullspace_names, f.nullspace));
   s += show(Option::tolerance, fmt::format("{:g}", f.tolerance));
+  s += show(Option::algebraic, to_string(f.algebraic));
   s += show(Option::perturb, name_of(perturb_names, f.perturb));
   s += show(Option::trees, f.trees_dir);
   s += show(Option::methods, fmt::format("{}", fmt::join(f.methods, ",")));
@@ -217,11 +230,13 @@ void add_user_poisson_flags(CLI::App& app, UserPoissonArgs& a) {
   app.add_option("--rows", a.rows, "refine the first row's tree (default) or rebuild each row's")
       ->transform(CLI::CheckedTransformer(row_names));
   app.add_option("--solver", a.solver, "linear solver")->transform(CLI::CheckedTransformer(solver_names));
-  app.add_option("--nullspace", a.nullspace, "singular Neumann problems: pin (default) or zero-mean")
+  app.add_option("--nullspace", a.nullspace, kNullspaceHelp)
       ->transform(CLI::CheckedTransformer(nullspace_names));
   app.add_option("--tolerance", a.tolerance, "relative residual the linear solver must reach (default 1e-10)")
       ->check(finite_number)
       ->check(CLI::Range(1e-16, 0.5));
+  app.add_option("--algebraic", a.algebraic, kAlgebraicHelp)
+      ->transform(CLI::CheckedTransformer(algebraic_names));
   app.add_option("--expect-order", a.expect_order,
                  "P[,G]: exit 1 when the fitted order of p (and of dp/dn) falls below");
   app.add_option("--expect-error", a.expect_error, "exit 1 when the finest row's L-inf error of p exceeds E")

@@ -23,8 +23,9 @@ struct StudyFlags {
   double stencil_growth = 2.0;
   double ring_cap = 0.0;
   RowProtocol rows = RowProtocol::refine;
-  mac::Nullspace nullspace = mac::Nullspace::pin;
+  NullspaceChoice nullspace = NullspaceChoice::pin;
   double tolerance = 1e-10;
+  AlgebraicControl algebraic = AlgebraicControl::tighten;
   Perturbation perturb = Perturbation::first_order;
   std::string trees_dir;
   std::vector<std::string> methods;

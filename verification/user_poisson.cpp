@@ -162,6 +162,7 @@ CaseResult run(const UserPoissonArgs& args) {
   CaseOptions options;
   if (args.nullspace_given) options.nullspace = args.nullspace;
   if (args.tolerance != 0.0) options.tolerance = args.tolerance;
+  options.algebraic = args.algebraic;
   options.max_cells = args.max_cells;
   CaseResult result = run_poisson_study<Dim>(s, options);
   // The smallest errors measured must sit well above what the numerical derivatives could add:
@@ -203,12 +204,13 @@ CaseResult run(const UserPoissonArgs& args) {
 std::string describe(const UserPoissonArgs& a) {
   return fmt::format(
       "liquid-verify poisson --dim {} --exact '{}'{} --domain {} --bc {} --tree {} --max-jump {} "
-      "--levels {} --rows {} --solver {} --nullspace {} --tolerance {:g} --expect-order {} --expect-error {} "
+      "--levels {} --rows {} --solver {} --nullspace {} --tolerance {:g} --algebraic {} --expect-order {} "
+      "--expect-error {} "
       "--max-cells {}",
       a.dim, a.exact, a.levelset.empty() ? "" : " --levelset '" + a.levelset + "'", a.domain, a.bc, a.tree,
       a.max_jump, a.levels, to_string(a.rows), linalg::to_string(a.solver),
-      a.nullspace_given ? (a.nullspace == mac::Nullspace::pin ? "pin" : "zero-mean") : "default",
-      a.tolerance != 0.0 ? a.tolerance : 1e-10, a.expect_order.empty() ? "none" : a.expect_order,
+      a.nullspace_given ? to_string(a.nullspace) : "default", a.tolerance != 0.0 ? a.tolerance : 1e-10,
+      to_string(a.algebraic), a.expect_order.empty() ? "none" : a.expect_order,
       a.expect_error > 0.0 ? fmt::format("{:g}", a.expect_error) : "none", a.max_cells);
 }
 

@@ -18,12 +18,13 @@ struct UserPoissonArgs {
   std::string levels = "4:6";
   RowProtocol rows = RowProtocol::refine;
   linalg::SolverKind solver = linalg::SolverKind::bicgstab_ilut;
-  mac::Nullspace nullspace = mac::Nullspace::pin;
+  NullspaceChoice nullspace = NullspaceChoice::pin;
   bool nullspace_given = false;  ///< --nullspace was given (refused on problems that are not singular)
   double tolerance = 0.0;        ///< the solver's relative residual; 0: the default 1e-10
-  std::string expect_order;      ///< "P" or "P,G": floors of the fitted orders of p and dp/dn
-  double expect_error = 0.0;     ///< > 0: ceiling of the finest row's L-inf error of p
-  long max_cells = 0;            ///< refuse rows estimated above this many cells (0: no limit)
+  AlgebraicControl algebraic = AlgebraicControl::tighten;  ///< --algebraic
+  std::string expect_order;   ///< "P" or "P,G": floors of the fitted orders of p and dp/dn
+  double expect_error = 0.0;  ///< > 0: ceiling of the finest row's L-inf error of p
+  long max_cells = 0;         ///< refuse rows estimated above this many cells (0: no limit)
 };
 
 /// Runs the study (tables printed by the caller). Throws liquid::Error naming the argument on bad

@@ -35,6 +35,8 @@ const char* flag_of(Option option) {
       return "--nullspace";
     case Option::tolerance:
       return "--tolerance";
+    case Option::algebraic:
+      return "--algebraic";
     case Option::perturb:
       return "--perturb";
     case Option::trees:
@@ -47,6 +49,30 @@ const char* flag_of(Option option) {
 
 const char* to_string(RowProtocol rows) {
   return rows == RowProtocol::refine ? "refine" : "rebuild";
+}
+
+const char* to_string(NullspaceChoice choice) {
+  switch (choice) {
+    case NullspaceChoice::pin:
+      return "pin";
+    case NullspaceChoice::pin_point:
+      return "pin-point";
+    case NullspaceChoice::zero_mean:
+      return "zero-mean";
+  }
+  return "?";
+}
+
+const char* to_string(AlgebraicControl control) {
+  switch (control) {
+    case AlgebraicControl::tighten:
+      return "tighten";
+    case AlgebraicControl::check:
+      return "check";
+    case AlgebraicControl::off:
+      return "off";
+  }
+  return "?";
 }
 
 bool CaseInfo::accepts_option(Option o) const {

@@ -31,6 +31,7 @@ enum class Option {
   rows,
   nullspace,
   tolerance,
+  algebraic,
   perturb,
   trees,
   methods
@@ -46,6 +47,25 @@ enum class RowProtocol {
 };
 const char* to_string(RowProtocol rows);
 
+/// How a Poisson study keeps the linear solver's (algebraic) error out of the errors it reports.
+/// Each row's solve is continued from its solution to a 100x tighter relative residual; the change
+/// of p (and of dp/dn) over the row's error is the row's "algebraic share".
+enum class AlgebraicControl {
+  tighten,  ///< continue until the share is below the bound (or the tolerance reaches 1e-15); report the last
+  check,    ///< continue once, report the share, keep the errors of the solve at the given tolerance
+  off,      ///< no second solve: the errors are those at the given tolerance, the share unmeasured
+};
+const char* to_string(AlgebraicControl control);
+
+/// How a study fixes the constant of a pure Neumann problem.
+enum class NullspaceChoice {
+  pin,        ///< pin one unknown, then spread the discrete incompatibility as a uniform source
+              ///< (mac::make_compatible)
+  pin_point,  ///< pin one unknown and leave the incompatibility at it, a point source (the paper's way)
+  zero_mean,  ///< the bordered zero-mean system
+};
+const char* to_string(NullspaceChoice choice);
+
 /// A deliberately degraded scheme, to watch the gate fail.
 enum class Perturbation { first_order };
 
@@ -57,23 +77,24 @@ struct LevelRange {
 /// Typed options of `liquid-verify run`, parsed and range-checked once in main; a case reads those it
 /// declared.
 struct CaseOptions {
-  std::optional<LevelRange> levels;          ///< --levels A:B
-  std::optional<int> max_jump;               ///< --max-jump K (>= 1)
-  std::optional<linalg::SolverKind> solver;  ///< --solver NAME
-  std::optional<mac::StencilRule> stencil;   ///< --stencil RULE
-  std::optional<int> rbf_exponent;           ///< --rbf-exponent S: PHS r^S of the Laplacian rows
-  std::optional<int> rbf_degree;             ///< --rbf-degree M: their polynomial degree
-  std::optional<int> gradient_degree;        ///< --gradient-degree M: degree of face gradients
-  std::optional<double> stencil_growth;      ///< --stencil-growth G
-  std::optional<double> ring_cap;            ///< --ring-cap C: ring stencils keep at most C x that size
-  std::optional<RowProtocol> rows;           ///< --rows refine|rebuild
-  std::optional<mac::Nullspace> nullspace;   ///< --nullspace pin|zero-mean
-  std::optional<double> tolerance;           ///< --tolerance T: the solver's relative residual
-  std::optional<Perturbation> perturb;       ///< --perturb first-order
-  std::optional<std::string> trees_dir;      ///< --trees DIR: write the trees checked
-  std::vector<std::string> methods;          ///< --methods A,B: run only these rows (empty: all)
-  long max_cells = 0;                        ///< budget: refuse rows above this many cells (0: no limit)
-  bool full = false;                         ///< the full suite's extent rather than the quick one
+  std::optional<LevelRange> levels;           ///< --levels A:B
+  std::optional<int> max_jump;                ///< --max-jump K (>= 1)
+  std::optional<linalg::SolverKind> solver;   ///< --solver NAME
+  std::optional<mac::StencilRule> stencil;    ///< --stencil RULE
+  std::optional<int> rbf_exponent;            ///< --rbf-exponent S: PHS r^S of the Laplacian rows
+  std::optional<int> rbf_degree;              ///< --rbf-degree M: their polynomial degree
+  std::optional<int> gradient_degree;         ///< --gradient-degree M: degree of face gradients
+  std::optional<double> stencil_growth;       ///< --stencil-growth G
+  std::optional<double> ring_cap;             ///< --ring-cap C: ring stencils keep at most C x that size
+  std::optional<RowProtocol> rows;            ///< --rows refine|rebuild
+  std::optional<NullspaceChoice> nullspace;   ///< --nullspace pin|pin-point|zero-mean
+  std::optional<double> tolerance;            ///< --tolerance T: the solver's relative residual
+  std::optional<AlgebraicControl> algebraic;  ///< --algebraic tighten|check|off
+  std::optional<Perturbation> perturb;        ///< --perturb first-order
+  std::optional<std::string> trees_dir;       ///< --trees DIR: write the trees checked
+  std::vector<std::string> methods;           ///< --methods A,B: run only these rows (empty: all)
+  long max_cells = 0;                         ///< budget: refuse rows above this many cells (0: no limit)
+  bool full = false;                          ///< the full suite's extent rather than the quick one
 };
 
 /// The budget's unit. A study's cost is counted in cells of kCellBytes: peak memory measured on
@@ -99,7 +120,7 @@ inline const OptionSet poisson_study_options{
     Option::levels,       Option::max_jump,   Option::solver,          Option::stencil,
     Option::rbf_exponent, Option::rbf_degree, Option::gradient_degree, Option::stencil_growth,
     Option::ring_cap,     Option::rows,       Option::nullspace,       Option::tolerance,
-    Option::perturb};
+    Option::algebraic,    Option::perturb};
 inline const OptionSet no_options{};
 
 /// A figure the accuracy gate compares with its accepted value in reference/<case>.toml.

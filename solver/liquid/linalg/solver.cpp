@@ -1,5 +1,8 @@
 #include "liquid/linalg/solver.hpp"
 
+#include <cstdint>
+#include <cstring>
+
 #include <fmt/format.h>
 #include <Eigen/IterativeLinearSolvers>
 #include <Eigen/SparseLU>
@@ -72,6 +75,29 @@ double true_residual(const SparseMatrix& A, const Vector& b, const Vector& x) {
   return nb > 0.0 ? nr / nb : nr;
 }
 
+/// A fingerprint of a matrix object and its entries (the address, the pattern and the values'
+/// bits, mixed a 64-bit word at a time): a solver keeps its factorisation for the next solve only
+/// when it matches.
+std::uint64_t matrix_key(const SparseMatrix& A) {
+  std::uint64_t h = 0x9E3779B97F4A7C15ull;
+  const auto mix = [&h](std::uint64_t w) {
+    h ^= w + 0x9E3779B97F4A7C15ull + (h << 6) + (h >> 2);
+    h *= 0xFF51AFD7ED558CCDull;
+  };
+  mix(reinterpret_cast<std::uintptr_t>(&A));
+  mix(static_cast<std::uint64_t>(A.rows())), mix(static_cast<std::uint64_t>(A.cols()));
+  mix(static_cast<std::uint64_t>(A.nonZeros()));
+  for (Eigen::Index k = 0; k < A.outerSize(); ++k)
+    for (SparseMatrix::InnerIterator it(A, k); it; ++it) {
+      std::uint64_t bits = 0;
+      const double v = it.value();
+      std::memcpy(&bits, &v, sizeof bits);
+      mix((static_cast<std::uint64_t>(k) << 32) ^ static_cast<std::uint64_t>(it.index()));
+      mix(bits);
+    }
+  return h;
+}
+
 // Iterative solvers share everything but the Eigen type; CG variants read the lower triangle.
 template <class EigenSolver>
 class Iterative final : public LinearSolver {
@@ -92,19 +118,28 @@ class Iterative final : public LinearSolver {
     }
     if (x.size() != b.size()) x = Vector::Zero(b.size());
     Stopwatch watch;
-    EigenSolver solver;
+    const std::uint64_t key = matrix_key(A);
+    if (!solver_ || key != key_) {
+      solver_ = std::make_unique<EigenSolver>();
+      key_ = key;
+      if constexpr (requires { solver_->preconditioner().setDroptol(1.0); }) {
+        solver_->preconditioner().setDroptol(options_.ilut_droptol);
+        solver_->preconditioner().setFillfactor(options_.ilut_fill);
+      }
+      solver_->compute(A);
+      if (solver_->info() != Eigen::Success) {
+        solver_.reset();
+        stats.setup_seconds = watch.seconds();
+        stats.info = SolveInfo::setup_failed;
+        return stats;
+      }
+    } else {
+      stats.hierarchy_reused = true;
+    }
+    EigenSolver& solver = *solver_;
     solver.setTolerance(options_.tolerance);
     solver.setMaxIterations(options_.max_iterations);
-    if constexpr (requires { solver.preconditioner().setDroptol(1.0); }) {
-      solver.preconditioner().setDroptol(options_.ilut_droptol);
-      solver.preconditioner().setFillfactor(options_.ilut_fill);
-    }
-    solver.compute(A);
     stats.setup_seconds = watch.seconds();
-    if (solver.info() != Eigen::Success) {
-      stats.info = SolveInfo::setup_failed;
-      return stats;
-    }
     watch.restart();
     // Krylov recurrences drift from the true residual; when the solver stops on its own estimate
     // short of the true one, restart from the current iterate (a few times at most).
@@ -130,8 +165,15 @@ class Iterative final : public LinearSolver {
     return stats;
   }
 
+  bool set_tolerance(double tolerance) override {
+    options_.tolerance = tolerance;
+    return true;
+  }
+
  private:
   SolveOptions options_;
+  std::unique_ptr<EigenSolver> solver_;  ///< holds a reference to the matrix its key names
+  std::uint64_t key_ = 0;
 };
 
 /// The AMG solvers on one process: every row on this rank (see amg.hpp for the distributed call),
@@ -165,16 +207,24 @@ class Direct final : public LinearSolver {
     LIQUID_VERIFY(A.rows() == A.cols() && A.rows() == b.size(),
                   "direct: matrix {}x{} and right-hand side {} differ", A.rows(), A.cols(), b.size());
     Stopwatch watch;
-    Eigen::SparseMatrix<double, Eigen::ColMajor> Ac = A;
-    Eigen::SparseLU<Eigen::SparseMatrix<double, Eigen::ColMajor>> lu;
-    lu.compute(Ac);
-    stats.setup_seconds = watch.seconds();
-    if (lu.info() != Eigen::Success) {
-      stats.info = SolveInfo::setup_failed;
-      return stats;
+    const std::uint64_t key = matrix_key(A);
+    if (!lu_ || key != key_) {
+      lu_ = std::make_unique<Eigen::SparseLU<Eigen::SparseMatrix<double, Eigen::ColMajor>>>();
+      key_ = key;
+      Eigen::SparseMatrix<double, Eigen::ColMajor> Ac = A;
+      lu_->compute(Ac);
+      if (lu_->info() != Eigen::Success) {
+        lu_.reset();
+        stats.setup_seconds = watch.seconds();
+        stats.info = SolveInfo::setup_failed;
+        return stats;
+      }
+    } else {
+      stats.hierarchy_reused = true;
     }
+    stats.setup_seconds = watch.seconds();
     watch.restart();
-    x = lu.solve(b);
+    x = lu_->solve(b);
     stats.solve_seconds = watch.seconds();
     stats.iterations = 1;
     if (!x.allFinite()) {
@@ -185,6 +235,12 @@ class Direct final : public LinearSolver {
     stats.info = stats.relative_residual < 1e-8 ? SolveInfo::converged : SolveInfo::not_converged;
     return stats;
   }
+  /// The factorisation is exact: a tolerance changes nothing.
+  bool set_tolerance(double) override { return true; }
+
+ private:
+  std::unique_ptr<Eigen::SparseLU<Eigen::SparseMatrix<double, Eigen::ColMajor>>> lu_;  ///< owns its copy
+  std::uint64_t key_ = 0;
 };
 
 }  // namespace

@@ -91,6 +91,15 @@ class LinearSolver {
   /// The AMG solvers keep their hierarchy for the next call while A keeps its layout (see
   /// AmgOptions::reuse_factor): keep one solver for a sequence of related systems.
   virtual SolveStats solve(const SparseMatrix& A, const Vector& b, Vector& x) = 0;
+  /// The relative residual later solves must reach. The Krylov solvers with ILUT, IC or Jacobi and
+  /// the direct solver keep their factorisation for the next solve of the same matrix object with
+  /// the same entries (setup_seconds is then the check alone), so a solve continued to a tighter
+  /// tolerance, or a second right-hand side, costs its iterations only. Returns false where the
+  /// solver cannot change it (a new solver is then needed).
+  virtual bool set_tolerance(double tolerance) {
+    (void)tolerance;
+    return false;
+  }
 };
 
 std::unique_ptr<LinearSolver> make_solver(const SolveOptions& options);

@@ -46,11 +46,6 @@ std::vector<Row> laplacian_rows(const tree::CellGraph<Dim>& graph, const Poisson
       [&](Local& local, long i) {
         const tree::CellId c = sys.layout.cell_of_dof[i];
         Row& row = rows[i];
-        if (c == sys.pinned) {
-          row.entries = {{static_cast<int>(i), 1.0}};
-          row.rhs = problem.pin_value(graph.centre(c));
-          return;
-        }
         row.rhs = problem.f_cells.empty() ? -problem.f(graph.centre(c)) : -problem.f_cells[c];
         if (!std::isfinite(row.rhs)) {
           const Vec<Dim> x = graph.centre(c);
@@ -181,13 +176,47 @@ PoissonSystem<Dim> assemble_poisson(const tree::CellGraph<Dim>& graph, const Poi
     sys.pinned = pin_cell(graph, sys.layout);
   }
   AssemblyStats stats;
-  const std::vector<Row> rows = laplacian_rows(graph, sys, problem, options, cache, stats);
+  std::vector<Row> rows = laplacian_rows(graph, sys, problem, options, cache, stats);
+  if (sys.pinned != tree::no_cell) {
+    // The pinned cell's row becomes p = value; its Laplacian row is kept for make_compatible().
+    const int d = sys.layout.dof_of_cell[sys.pinned];
+    sys.pinned_equation = std::move(rows[d]);
+    rows[d].entries = {{d, 1.0}};
+    rows[d].rhs = problem.pin_value(graph.centre(sys.pinned));
+  }
   fill_matrix(graph, rows, sys);
   stats.n_unknowns = sys.n_unknowns();
   stats.seconds = watch.seconds();
   sys.stats = stats;
   return sys;
 }
+
+template <int Dim>
+linalg::Vector uniform_source(const PoissonSystem<Dim>& system) {
+  linalg::Vector c = linalg::Vector::Ones(system.b.size());
+  if (system.pinned != tree::no_cell) c[system.layout.dof_of_cell[system.pinned]] = 0.0;
+  return c;
+}
+
+template <int Dim>
+double make_compatible(const PoissonSystem<Dim>& system, const linalg::Vector& z, linalg::Vector& x) {
+  if (system.pinned == tree::no_cell || system.pinned_equation.entries.empty()) return 0.0;
+  LIQUID_VERIFY(z.size() == x.size() && x.size() == system.b.size(),
+                "make_compatible: {} and {} values for {} unknowns", z.size(), x.size(), system.b.size());
+  // x - a z solves every row but the pin's with the source shifted by -a (z_pin = 0 keeps the
+  // pinned value); a is chosen so that the pin's own row holds too: r(x) - a (row . z - 1) = 0.
+  double rx = -system.pinned_equation.rhs, rz = -1.0;
+  for (const auto& [j, v] : system.pinned_equation.entries) rx += v * x[j], rz += v * z[j];
+  if (!(std::abs(rz) > 0.0) || !std::isfinite(rx / rz)) return 0.0;
+  const double a = rx / rz;
+  x -= a * z;
+  return a;
+}
+
+template linalg::Vector uniform_source<2>(const PoissonSystem<2>&);
+template linalg::Vector uniform_source<3>(const PoissonSystem<3>&);
+template double make_compatible<2>(const PoissonSystem<2>&, const linalg::Vector&, linalg::Vector&);
+template double make_compatible<3>(const PoissonSystem<3>&, const linalg::Vector&, linalg::Vector&);
 
 template PoissonSystem<2> assemble_poisson<2>(const tree::CellGraph<2>&, const PoissonProblem<2>&,
                                               const PoissonOptions&, rbf::WeightCache<2>*);

@@ -58,8 +58,12 @@ struct PoissonSystem {
   linalg::SparseMatrix A;
   linalg::Vector b;
   tree::CellId pinned = tree::no_cell;  ///< the pinned cell (Nullspace::pin on a singular problem)
-  bool singular = false;                ///< no Dirichlet value anywhere: p is defined up to a constant
-  bool bordered = false;                ///< true for Nullspace::zero_mean: the last unknown is a multiplier
+  /// The pinned cell's own Laplacian row, which the pin replaced: the one equation the pinned system
+  /// drops. Its residual at a solution is the discrete incompatibility of f with the wall fluxes,
+  /// which the pin turns into a point source at the pinned cell (see make_compatible()).
+  Row pinned_equation;
+  bool singular = false;  ///< no Dirichlet value anywhere: p is defined up to a constant
+  bool bordered = false;  ///< true for Nullspace::zero_mean: the last unknown is a multiplier
   AssemblyStats stats;
 
   long n_unknowns() const { return layout.n_unknowns(); }
@@ -73,6 +77,17 @@ struct PoissonSystem {
 template <int Dim>
 PoissonSystem<Dim> assemble_poisson(const tree::CellGraph<Dim>& graph, const PoissonProblem<Dim>& problem,
                                     const PoissonOptions& options, rbf::WeightCache<Dim>* cache = nullptr);
+
+/// For a pinned singular system: moves the discrete incompatibility from the pinned cell to a uniform
+/// source, as a zero-mean (bordered) system would, without its dense row. `x` solves the pinned
+/// system, `z` the pinned system with 1 in every row but the pin's (0 there); on return x solves
+/// every Laplacian row, the pinned cell's included, with f shifted by one constant, and keeps the
+/// pinned value. Returns the constant (0 and x unchanged when nothing is pinned).
+template <int Dim>
+double make_compatible(const PoissonSystem<Dim>& system, const linalg::Vector& z, linalg::Vector& x);
+/// The right-hand side `z` above is solved for.
+template <int Dim>
+linalg::Vector uniform_source(const PoissonSystem<Dim>& system);
 
 /// face_normal_derivative() on the system's unknowns and boundary.
 template <int Dim>

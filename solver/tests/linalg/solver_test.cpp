@@ -42,6 +42,32 @@ TEST(LinearSolvers, EveryKindSolvesAPoissonSystem) {
   }
 }
 
+TEST(LinearSolvers, AKeptFactorisationServesATighterSolveAndAChangedMatrixIsFactorisedAgain) {
+  SparseMatrix A = poisson(30);
+  const Vector x_exact = Vector::LinSpaced(A.rows(), -1.0, 2.0);
+  for (SolverKind kind : {SolverKind::bicgstab_ilut, SolverKind::cg_ic, SolverKind::direct}) {
+    A = poisson(30);
+    Vector b = A * x_exact;
+    const auto solver = make_solver({kind, 1e-6, 5000});
+    Vector x;
+    const SolveStats first = solver->solve(A, b, x);
+    ASSERT_TRUE(first.converged()) << first.describe();
+    EXPECT_FALSE(first.hierarchy_reused);
+    ASSERT_TRUE(solver->set_tolerance(1e-12));
+    const SolveStats tighter = solver->solve(A, b, x);
+    EXPECT_TRUE(tighter.converged()) << tighter.describe();
+    EXPECT_TRUE(tighter.hierarchy_reused) << to_string(kind);
+    EXPECT_LE(tighter.relative_residual, 1e-12);
+    // Same object, one entry changed: the kept factorisation must not be used for it.
+    A.coeffRef(0, 0) += 1.0;
+    b = A * x_exact;
+    const SolveStats changed = solver->solve(A, b, x);
+    EXPECT_TRUE(changed.converged()) << changed.describe();
+    EXPECT_FALSE(changed.hierarchy_reused) << to_string(kind);
+    EXPECT_LT((x - x_exact).lpNorm<Eigen::Infinity>(), 1e-8) << to_string(kind);
+  }
+}
+
 TEST(LinearSolvers, NonConvergenceIsReportedWithTheResidualReached) {
   const SparseMatrix A = poisson(40);
   const Vector b = Vector::Ones(A.rows());

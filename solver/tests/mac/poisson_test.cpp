@@ -320,6 +320,47 @@ TEST(Poisson, ZeroMeanAndPinnedSolutionsDifferByAConstant) {
   EXPECT_NEAR(pb[pa.size()], 0.0, 1e-2);  // the multiplier absorbs only the discrete inconsistency
 }
 
+TEST(Poisson, SpreadingThePinnedSourceGivesTheZeroMeanSolution) {
+  // f made incompatible with the (homogeneous) wall fluxes by a constant: the pinned system puts the
+  // mismatch at the pinned cell; make_compatible must move it to a uniform source, which is what the
+  // bordered zero-mean system does with its multiplier.
+  const tree::CellGraph<2> graph = non_graded<2>(5);
+  const double pi = std::acos(-1.0);
+  auto exact = [pi](const Vec<2>& x) { return std::cos(pi * x[0]) * std::cos(pi * x[1]); };
+  PoissonProblem<2> problem;
+  problem.f = [pi, exact](const Vec<2>& x) { return -2 * pi * pi * exact(x) + 0.5; };
+  problem.pin_value = exact;
+  PoissonOptions pin, mean;
+  mean.nullspace = Nullspace::zero_mean;
+  const auto a = assemble_poisson<2>(graph, problem, pin);
+  const auto b = assemble_poisson<2>(graph, problem, mean);
+  ASSERT_NE(a.pinned, tree::no_cell);
+  ASSERT_FALSE(a.pinned_equation.entries.empty());
+  const auto solver = linalg::make_solver({linalg::SolverKind::direct});
+  linalg::Vector x, z, pb;
+  ASSERT_TRUE(solver->solve(a.A, a.b, x).converged());
+  ASSERT_TRUE(solver->solve(a.A, uniform_source<2>(a), z).converged());
+  ASSERT_TRUE(linalg::solve(b.A, b.b, pb, {linalg::SolverKind::direct}).converged());
+  const int pd = a.layout.dof_of_cell[a.pinned];
+  const double pinned_value = x[pd];
+  double before = -a.pinned_equation.rhs;
+  for (const auto& [j, v] : a.pinned_equation.entries) before += v * x[j];
+  EXPECT_GT(std::abs(before), 1.0) << "the constant in f should leave a large mismatch at the pin";
+  const double shift = make_compatible<2>(a, z, x);
+  EXPECT_EQ(x[pd], pinned_value);
+  double after = -(a.pinned_equation.rhs - shift);
+  for (const auto& [j, v] : a.pinned_equation.entries) after += v * x[j];
+  EXPECT_NEAR(after, 0.0, 1e-8 * std::abs(before));
+  // The multiplier of the bordered system is the same shift, and the solutions differ by a constant.
+  const long n = x.size();
+  EXPECT_NEAR(shift, pb[n], 1e-8 * std::abs(shift));
+  const linalg::Vector d = x - pb.head(n);
+  EXPECT_LT(d.maxCoeff() - d.minCoeff(), 1e-8);
+  // Nothing pinned: nothing to do.
+  linalg::Vector y = pb.head(n);
+  EXPECT_EQ(make_compatible<2>(b, linalg::Vector::Zero(b.b.size()), y), 0.0);
+}
+
 TEST(Poisson, BadInputIsNamed) {
   const tree::CellGraph<2> graph = tree::uniform<2>(Box<2>{Vec<2>::Zero(), Vec<2>::Ones()}, 3);
   PoissonProblem<2> problem;
