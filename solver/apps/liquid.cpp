@@ -305,13 +305,13 @@ void write_json(const std::string& path, const scene::RunSummary& s, const std::
 }
 
 /// The paper's Table 1 columns (Adams et al. 2007, Sec. 6) and every phase.
-void print_sph_summary(const scene::SphRunSummary& s, const std::string& name, int dim) {
+void print_sph_summary(const scene::SphRunSummary& s, const std::string& name, int dim, bool adaptive) {
   const auto sec = [&](const char* phase) {
     const auto it = s.seconds.find(phase);
     return it == s.seconds.end() ? 0.0 : it->second;
   };
-  fmt::print("\nTable 1 row, adaptive SPH ({}, {}D, {} steps to t = {:.4g} s, {} threads)\n", name, dim,
-             s.steps, s.time, s.threads);
+  fmt::print("\nTable 1 row, {} SPH ({}, {}D, {} steps to t = {:.4g} s, {} threads)\n",
+             adaptive ? "adaptive" : "single-resolution (--regular)", name, dim, s.steps, s.time, s.threads);
   fmt::print("  {:>10} {:>10} {:>8} {:>11} {:>8} {:>10} {:>9} {:>8} {:>9} {:>9}\n", "particles", "single res",
              "gain", "neighbours", "forces", "projection", "redist.", "elfs", "resample", "total s");
   fmt::print(
@@ -338,8 +338,8 @@ void print_sph_summary(const scene::SphRunSummary& s, const std::string& name, i
   fmt::print("\n  wall time {:.2f} s\n", s.wall);
 }
 
-void write_sph_json(const std::string& path, const scene::SphRunSummary& s, const std::string& name,
-                    int dim) {
+void write_sph_json(const std::string& path, const scene::SphRunSummary& s, const std::string& name, int dim,
+                    bool adaptive) {
   std::string phases, levels;
   for (const auto& [phase, t] : s.seconds)
     phases += fmt::format("{}\"{}\": {:.6g}", phases.empty() ? "" : ", ", phase, t);
@@ -348,7 +348,8 @@ void write_sph_json(const std::string& path, const scene::SphRunSummary& s, cons
   liquid::io::write_text_file(
       path,
       fmt::format(
-          "{{\n  \"scene\": \"{}\", \"method\": \"sph\", \"dimension\": {}, \"steps\": {}, \"time\": {:.9g}, "
+          "{{\n  \"scene\": \"{}\", \"method\": \"sph\", \"adaptive\": {}, \"dimension\": {}, \"steps\": {}, "
+          "\"time\": {:.9g}, "
           "\"threads\": {},\n  \"particles\": {:.6g}, \"single_particles\": {:.6g}, \"min_particles\": {}, "
           "\"max_particles\": {},\n  \"particles_per_level\": [{}], \"split\": {}, \"merged\": {}, "
           "\"emitted\": {},\n"
@@ -356,7 +357,7 @@ void write_sph_json(const std::string& path, const scene::SphRunSummary& s, cons
           "{:.6g}, \"sound_speed\": {:.6g}, \"wall_seconds\": "
           "{:.6g},\n"
           "  \"seconds_per_step\": {{{}}}\n}}\n",
-          name, dim, s.steps, s.time, s.threads, s.particles, s.single_particles, s.min_particles,
+          name, adaptive, dim, s.steps, s.time, s.threads, s.particles, s.single_particles, s.min_particles,
           s.max_particles, levels, s.split, s.merged, s.emitted, s.max_density_error, s.max_compression,
           s.rested, s.spacing, s.sound_speed, s.wall, phases));
 }
@@ -410,8 +411,8 @@ int run_sph(const Args& a, const std::string& scene_path, scene::Scene<Dim>* loa
   }
   run_to_end(*run, a);
   const scene::SphRunSummary s = run->summary();
-  print_sph_summary(s, run->scene().name, Dim);
-  if (!a.json.empty()) write_sph_json(a.json, s, run->scene().name, Dim);
+  print_sph_summary(s, run->scene().name, Dim, run->scene().adaptive);
+  if (!a.json.empty()) write_sph_json(a.json, s, run->scene().name, Dim, run->scene().adaptive);
   if (!a.out.empty()) fmt::print("  frames: {} in {}/{}.xmf\n", run->n_frames(), a.out, run->scene().name);
   return 0;
 }

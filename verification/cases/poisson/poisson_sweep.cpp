@@ -18,6 +18,7 @@
 // draws the same study on any machine, and `--methods SEED[,SEED]` runs only those.
 
 #include <charconv>
+#include <cstdio>
 #include <cmath>
 #include <numbers>
 #include <random>
@@ -369,6 +370,10 @@ CaseResult run(const CaseOptions& options) {
       continue;
     }
     table.add_row(o.row);
+    // A long sweep shows each study as it finishes.
+    fmt::print("  study {} ({}D): {}, {:.1f} s\n", seed, three ? 3 : 2, std::get<std::string>(o.row[9]),
+               std::get<double>(o.row[10]));
+    std::fflush(stdout);
     if (o.converged)
       ++converged;
     else
