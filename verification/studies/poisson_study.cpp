@@ -90,6 +90,7 @@ double max_error(const tree::CellGraph<Dim>& graph, const PoissonStudy<Dim>& stu
 template <int Dim>
 struct Measured {
   double shift = 0.0, err_p = 0.0, err_grad = 0.0;
+  double p_scale = 0.0, grad_scale = 0.0;  ///< max |p| at the unknowns, max |dp/dn| at the faces measured
   tree::CellId worst_cell = tree::no_cell;
   tree::FaceId worst_face = tree::no_face;
   std::vector<double> dpdn;
@@ -102,16 +103,28 @@ Measured<Dim> measure(const tree::CellGraph<Dim>& graph, const PoissonStudy<Dim>
   const auto& cells = system.layout.cell_of_dof;
   m.shift = mean_shift<Dim>(graph, study, system, x);
   for (std::size_t i = 0; i < cells.size(); ++i) {
-    const double e = std::abs(x[i] - m.shift - study.exact(graph.centre(cells[i])));
+    const double exact = study.exact(graph.centre(cells[i]));
+    const double e = std::abs(x[i] - m.shift - exact);
+    m.p_scale = std::max(m.p_scale, std::abs(exact));
     if (e > m.err_p || m.worst_cell == tree::no_cell) m.err_p = e, m.worst_cell = cells[i];
   }
   m.dpdn = mac::face_normal_derivative<Dim>(graph, system, study.discretisation, x);
   graph.for_each_face([&](tree::FaceId f) {
     if (std::isnan(m.dpdn[f])) return;
-    const double e = std::abs(m.dpdn[f] - study.gradient(graph.face_centre(f))[graph.face(f).axis]);
+    const double exact = study.gradient(graph.face_centre(f))[graph.face(f).axis];
+    const double e = std::abs(m.dpdn[f] - exact);
+    m.grad_scale = std::max(m.grad_scale, std::abs(exact));
     if (e > m.err_grad || m.worst_face == tree::no_face) m.err_grad = e, m.worst_face = f;
   });
   return m;
+}
+
+/// The error a share is taken of: the row's, but never below the round-off level of a double solve
+/// (kRoundoffFraction of the solution's scale), where a solver's last digits are all that is left.
+template <int Dim>
+std::pair<double, double> share_denominators(const Measured<Dim>& m) {
+  return {std::max({m.err_p, kRoundoffFraction * m.p_scale, exact_error_level}),
+          std::max({m.err_grad, kRoundoffFraction * m.grad_scale, exact_error_level})};
 }
 
 /// |x - y|_inf and |dp/dn(x) - dp/dn(y)|_inf over the faces both measure: how far two solves apart.
@@ -192,12 +205,14 @@ PoissonRun solve_poisson(const tree::CellGraph<Dim>& graph, const PoissonStudy<D
       if (z.size() > 0) mac::make_compatible<Dim>(system, z, y);
       Measured<Dim> my = measure<Dim>(graph, study, system, y);
       const auto [dp, dg] = distance<Dim>(system.layout.cell_of_dof.size(), x, m, y, my);
-      const Measured<Dim>& reported = study.algebraic == AlgebraicControl::check ? m : my;
-      const double d = std::max(dp / std::max(reported.err_p, exact_error_level),
-                                dg / std::max(reported.err_grad, exact_error_level));
+      const auto [ep, eg] = share_denominators<Dim>(study.algebraic == AlgebraicControl::check ? m : my);
+      const double d = std::max(dp / ep, dg / eg);
       // After the first round, d bounds the error of the solve before; the one kept (100x
       // tighter) is estimated by how fast the distances fall: d * (d / d_before), at most d.
       run.algebraic_share = round == 0 ? d : d * std::min(1.0, d / std::max(distance_before, 1e-300));
+      // Distances that fall by less than 10x for a 100x tighter solve (or a solve that stalls) are the
+      // round-off of the solve, not an iteration error a tighter tolerance would remove.
+      run.solve_at_roundoff = (round > 0 && d > 0.1 * distance_before) || !stats.converged();
       distance_before = d;
       if (study.algebraic == AlgebraicControl::check) break;
       // A solve that stalls short of the tighter tolerance still improves x when its residual fell.
@@ -214,11 +229,12 @@ PoissonRun solve_poisson(const tree::CellGraph<Dim>& graph, const PoissonStudy<D
   const auto& cells = system.layout.cell_of_dof;
   run.err_p = m.err_p;
   run.err_grad = m.err_grad;
+  run.p_scale = m.p_scale;
+  run.grad_scale = m.grad_scale;
   run.worst_p = describe_cell(graph, study, m.worst_cell);
   std::vector<std::pair<long, double>> by_level;
   for (std::size_t i = 0; i < cells.size(); ++i) {
     const double exact = study.exact(graph.centre(cells[i]));
-    run.p_scale = std::max(run.p_scale, std::abs(exact));
     const int l = graph.level(cells[i]);
     if (static_cast<int>(by_level.size()) <= l) by_level.resize(l + 1, {0, 0.0});
     by_level[l].first += 1;
@@ -229,8 +245,6 @@ PoissonRun solve_poisson(const tree::CellGraph<Dim>& graph, const PoissonStudy<D
 
   graph.for_each_face([&](tree::FaceId f) {
     if (std::isnan(m.dpdn[f])) return;
-    run.grad_scale =
-        std::max(run.grad_scale, std::abs(study.gradient(graph.face_centre(f))[graph.face(f).axis]));
     const auto& g = graph.face(f);
     if (!g.is_boundary())
       run.max_level_jump = std::max(run.max_level_jump, std::abs(g.side_level[0] - g.side_level[1]));
@@ -262,13 +276,21 @@ std::string join_orders(const std::vector<double>& steps) {
 /// One quantity's classification; `where` says where the finest row's error sits.
 std::pair<std::string, std::string> classify(const std::vector<int>& levels, const std::vector<double>& h,
                                              const std::vector<double>& e, const std::vector<double>& share,
-                                             double scale, double floor, double bound,
-                                             const std::string& where) {
+                                             const std::vector<bool>& roundoff, double scale, double floor,
+                                             double bound, const std::string& where) {
   const std::size_t n = e.size();
   if (n == 0) return {"too-few-rows", "no row converged"};
   if (*std::max_element(e.begin(), e.end()) < exact_error_level)
     return {"exact", fmt::format("every error is below {:.0e}: the scheme reproduces this solution",
                                  exact_error_level)};
+  for (std::size_t k = 0; k < n; ++k)
+    if (!std::isnan(share[k]) && share[k] > bound && roundoff[k])
+      return {"round-off",
+              fmt::format("at level {} the solve's last digits move the row's error by up to {:.2g} "
+                          "and tighter solves no longer reduce it: the errors ({:.2e} at the finest "
+                          "row, {:.1e} of the solution's scale) are at the round-off floor of this "
+                          "system; drop the finest rows or take a less flat solution",
+                          levels[k], share[k], e.back(), e.back() / std::max(scale, 1e-300))};
   for (std::size_t k = 0; k < n; ++k)
     if (!std::isnan(share[k]) && share[k] > bound)
       return {"algebraic",
@@ -312,6 +334,11 @@ std::pair<std::string, std::string> classify(const std::vector<int>& levels, con
                 ? fmt::format("differ by {:.2f} (more than {:g})", std::abs(change), kSettledSpread)
                 : fmt::format("{:.2f} and {:.2f} are not both below the floor {:.2f}", before, last, floor),
             levels.front(), levels.back() + 1)};
+  if (steps.size() < 3)
+    return {"too-few-rows",
+            fmt::format("{}: two step orders below {:.2f} that agree are not yet a loss of order; "
+                        "add a finer row (--levels {}:{}) to tell it from a pre-asymptotic study",
+                        orders, floor, levels.front(), levels.back() + 1)};
   return {
       "loss-of-order",
       fmt::format("{}: the last two step orders agree within {:g} at about {:.2f}, below {:.2f}: a loss of "
@@ -324,9 +351,11 @@ std::pair<std::string, std::string> classify(const std::vector<int>& levels, con
 OrderDiagnosis diagnose_orders(const std::vector<int>& levels, const std::vector<PoissonRun>& runs,
                                double floor_p, double floor_grad, double bound) {
   std::vector<double> h, ep, eg, share;
+  std::vector<bool> roundoff;
   double sp = 0.0, sg = 0.0;
   for (const PoissonRun& r : runs) {
     h.push_back(r.h), ep.push_back(r.err_p), eg.push_back(r.err_grad), share.push_back(r.algebraic_share);
+    roundoff.push_back(r.solve_at_roundoff);
     sp = std::max(sp, r.p_scale), sg = std::max(sg, r.grad_scale);
   }
   std::string where_p, where_g;
@@ -343,8 +372,8 @@ OrderDiagnosis diagnose_orders(const std::vector<int>& levels, const std::vector
     where_g = fmt::format("in the finest row the worst dp/dn is at {}", last.worst_grad);
   }
   OrderDiagnosis d;
-  std::tie(d.p_kind, d.p) = classify(levels, h, ep, share, sp, floor_p, bound, where_p);
-  std::tie(d.grad_kind, d.grad) = classify(levels, h, eg, share, sg, floor_grad, bound, where_g);
+  std::tie(d.p_kind, d.p) = classify(levels, h, ep, share, roundoff, sp, floor_p, bound, where_p);
+  std::tie(d.grad_kind, d.grad) = classify(levels, h, eg, share, roundoff, sg, floor_grad, bound, where_g);
   return d;
 }
 
@@ -414,6 +443,14 @@ CaseResult run_poisson_study(PoissonStudy<Dim> study, const CaseOptions& options
   };
   const auto check_share = [&](const std::string& row, const PoissonRun& r) {
     if (std::isnan(r.algebraic_share) || r.algebraic_share <= study.algebraic_bound) return;
+    if (r.solve_at_roundoff) {
+      result.warnings.push_back(
+          fmt::format("{}: the solve's round-off moves the row's error by up to {:.2g} (tighter solves no "
+                      "longer reduce it): "
+                      "its error {:.2e} is at the round-off floor of this system",
+                      row, r.algebraic_share, r.err_p));
+      return;
+    }
     const std::string what = fmt::format(
         "{}: the algebraic error is up to {:.2g} of the row's error (bound {:.2g}) at relative residual "
         "{:.0e}{}: "

@@ -97,11 +97,15 @@ struct PoissonRun {
   linalg::SolveStats solve;  ///< the solve at the study's tolerance
   mac::AssemblyStats assembly;
   /// The algebraic part of the errors reported, as a share: d = the larger of |x - x'|_inf / err p
-  /// and |dp/dn(x) - dp/dn(x')|_inf / err dp/dn, x' the solve at 100x x's tolerance. check: d, an
+  /// and |dp/dn(x) - dp/dn(x')|_inf / err dp/dn (each error floored at kRoundoffFraction of the
+  /// solution's scale), x' the solve at 100x x's tolerance. check: d, an
   /// upper bound for x. tighten, one round: d (x' is reported, its share is below d); after k > 1
   /// rounds: d_k^2 / d_(k-1), the distances' rate of fall carried one round on. NaN: not measured
   /// (off, the direct solver).
   double algebraic_share = std::numeric_limits<double>::quiet_NaN();
+  /// The continued solves stopped improving (a 100x tighter solve moved the solution more than a
+  /// tenth as much as the one before, or stalled): what is left of the share is the solve's round-off.
+  bool solve_at_roundoff = false;
   double tolerance = 0.0;        ///< the relative residual the reported solution was solved to
   double control_seconds = 0.0;  ///< the continued solves (setup included)
   /// The constant a pinned system's source was shifted by to make it compatible (0: not pinned, or

@@ -81,6 +81,13 @@ TEST(OrderDiagnosis, ALargeAlgebraicShareComesFirst) {
   EXPECT_NE(d.p.find("level 7"), std::string::npos) << d.p;
 }
 
+TEST(OrderDiagnosis, ASolveThatNoLongerImprovesIsRoundoffNotAlgebraic) {
+  auto runs = rows_with_steps({2.0, 2.0, 2.0});
+  runs.back().algebraic_share = 0.2;
+  runs.back().solve_at_roundoff = true;
+  EXPECT_EQ(diagnose(runs).p_kind, "round-off");
+}
+
 TEST(OrderDiagnosis, ErrorsAtTheRoundoffFloor) {
   // 2e-9 and flat: above the exact level 1e-9 absolute, below 1e-8 of |p| = 1.
   auto runs = rows_with_steps({2.0, 0.1}, 8e-9);
@@ -92,6 +99,7 @@ TEST(OrderDiagnosis, ErrorsAtTheRoundoffFloor) {
 
 TEST(OrderDiagnosis, TwoRowsCannotTellALossFromAPreAsymptoticStudy) {
   EXPECT_EQ(diagnose(rows_with_steps({1.2})).p_kind, "too-few-rows");
+  EXPECT_EQ(diagnose(rows_with_steps({1.79, 1.76})).p_kind, "too-few-rows");  // a loss needs three steps
   EXPECT_EQ(diagnose(rows_with_steps({2.0})).p_kind, "converges");
 }
 

@@ -18,8 +18,8 @@
 // draws the same study on any machine, and `--methods SEED[,SEED]` runs only those.
 
 #include <charconv>
-#include <cstdio>
 #include <cmath>
+#include <cstdio>
 #include <numbers>
 #include <random>
 
