@@ -301,8 +301,15 @@ std::pair<std::string, std::string> classify(const std::vector<int>& levels, con
   if (n == 1) return {"too-few-rows", "one row: no order"};
   std::vector<double> steps;
   for (std::size_t k = 1; k < n; ++k) steps.push_back(pair_order(h[k - 1], e[k - 1], h[k], e[k]));
-  const double fitted = fit_order(h, e), last = steps.back();
-  const std::string orders = fmt::format("fitted {:.2f}, step orders {}", fitted, join_orders(steps));
+  // The order the study has reached: fitted over its three finest rows, so that coarse rows still
+  // far from the asymptotic range do not hide a study that has arrived (the fit over every row is
+  // shown too).
+  const std::size_t tail = std::min<std::size_t>(n, 3);
+  const double fitted = fit_order(std::span(h).last(tail), std::span(e).last(tail)), last = steps.back();
+  const std::string orders =
+      n > tail ? fmt::format("fitted {:.2f} over the finest {} rows ({:.2f} over all), step orders {}",
+                             fitted, tail, fit_order(h, e), join_orders(steps))
+               : fmt::format("fitted {:.2f}, step orders {}", fitted, join_orders(steps));
   if (e.back() < kRoundoffFraction * scale && last < floor)
     return {"round-off",
             fmt::format("{}; the finest error {:.2e} is below {:.0e} of the solution's scale {:.3g}: "

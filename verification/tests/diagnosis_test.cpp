@@ -68,6 +68,11 @@ TEST(OrderDiagnosis, StepOrdersCrossingTheFloorAreNotYetALoss) {
   EXPECT_EQ(diagnose(rows_with_steps({1.75, 1.7, 1.65})).p_kind, "loss-of-order");
 }
 
+TEST(OrderDiagnosis, ACoarseRowFarFromTheAsymptoticRangeDoesNotHideConvergence) {
+  // The fit over all rows is 1.71; over the three finest it is 2.05.
+  EXPECT_EQ(diagnose(rows_with_steps({-0.36, 2.0, 2.11, 2.07, 2.04})).p_kind, "converges");
+}
+
 TEST(OrderDiagnosis, OrdersFarAboveTheSchemeAreFlagged) {
   const OrderDiagnosis d = diagnose(rows_with_steps({2.2, 3.0, 4.0}));
   EXPECT_EQ(d.p_kind, "above-order");

@@ -10,12 +10,12 @@
 //     interface (a random ellipse or ellipsoid, or an annulus or torus) with p = exact on it;
 //   - the tree: a seeded random tree (levels base .. base + 2, split probability 0.3) or a band
 //     around the interface (or a sphere), with level jumps 1 to 3; rows refine the first tree.
-// Expected: every study converges (the order diagnosis of poisson_study says "converges" at
-// p >= 1.8 and dp/dn >= 1.6) after the pre-asymptotic ones are re-run with one more row (while the
-// row stays within the budget); the quick tier draws 8 studies and asserts all of them, the full
-// tier draws 120 and asserts that at least 95% converge. Every study that does not is listed in a
-// warning with its solution, boundary, tree and diagnosis; its seed (the table's first column)
-// draws the same study on any machine, and `--methods SEED[,SEED]` runs only those.
+// Expected: every study reaches p >= 1.8 and dp/dn >= 1.6 (the order diagnosis of poisson_study
+// says "converges", or "above-order": above the scheme's 2, pre-asymptotic from above) after the
+// pre-asymptotic ones are re-run with more rows (while a row stays within the budget); the quick
+// tier draws 8 studies and asserts all of them, the full tier draws 120 and asserts at least 95%. Every study
+// that does not is listed in a warning with its solution, boundary, tree and diagnosis; its seed (the table's
+// first column) draws the same study on any machine, and `--methods SEED[,SEED]` runs only those.
 
 #include <charconv>
 #include <cmath>
@@ -239,9 +239,10 @@ Drawn<Dim> draw_study(std::uint64_t seed, bool full) {
 
   s.max_jump = 1 + d.pick(3);
   s.asserted = false;
-  // Rows: 2D base 4..6 (finest 6..8), 3D base 2..4 (finest 4..6); a pre-asymptotic study gets
+  // Rows: 2D base 4..6 (finest 6..8), 3D base 2..4 (finest 4..6; the full tier starts one level
+  // finer, where 4^3 coarse cells leave too few rows asymptotic); a pre-asymptotic study gets
   // more rows, up to three in 2D and one in 3D (two in the full tier), within the cell budget.
-  s.level_min = Dim == 2 ? 4 : 2;
+  s.level_min = Dim == 2 ? 4 : full ? 3 : 2;
   s.level_max = s.level_min + 2;
   out.level_cap = s.level_max + (Dim == 2 ? 3 : full ? 2 : 1);
   const bool random_tree = d.pick(2) == 0;
@@ -264,6 +265,9 @@ Drawn<Dim> draw_study(std::uint64_t seed, bool full) {
 
 struct Outcome {
   bool converged = false;
+  /// Reaches the orders asked (p >= 1.8, dp/dn >= 1.6): converged, or above the scheme's order at
+  /// the budget (pre-asymptotic from above, said in its diagnosis).
+  bool meets = false;
   std::string kind;  ///< the worse diagnosis of p and dp/dn
   std::vector<Table::Cell> row;
   std::string reason;
@@ -301,7 +305,9 @@ Outcome run_study(std::uint64_t seed, const CaseOptions& options, long budget) {
     if (level < s.level_max) continue;
     diagnosis = diagnose_orders(levels, runs, kSchemeOrderFloor, kSchemeGradOrderFloor, s.algebraic_bound);
     const auto again = [](const std::string& k) {
-      return k == "pre-asymptotic" || k == "too-few-rows" || k == "above-order";
+      // A loss of order from three step orders is weak evidence too: while the budget allows, one
+      // more row either confirms it or shows the study was still on its way.
+      return k == "pre-asymptotic" || k == "too-few-rows" || k == "above-order" || k == "loss-of-order";
     };
     if (!(again(diagnosis.p_kind) || again(diagnosis.grad_kind)) || level >= drawn.level_cap) break;
   }
@@ -316,6 +322,8 @@ Outcome run_study(std::uint64_t seed, const CaseOptions& options, long budget) {
   const auto ok = [](const std::string& k) { return k == "converges" || k == "exact"; };
   Outcome o;
   o.converged = levels.size() >= 2 && ok(diagnosis.p_kind) && ok(diagnosis.grad_kind);
+  const auto at_least = [&ok](const std::string& k) { return ok(k) || k == "above-order"; };
+  o.meets = levels.size() >= 2 && at_least(diagnosis.p_kind) && at_least(diagnosis.grad_kind);
   o.kind = !ok(diagnosis.p_kind) ? diagnosis.p_kind : diagnosis.grad_kind;
   if (o.kind.empty()) o.kind = "failed";
   const auto order = [](const std::vector<double>& x, const std::vector<double>& y) {
@@ -352,12 +360,12 @@ CaseResult run(const CaseOptions& options) {
     for (int i = 0; i < (options.full ? 120 : 8); ++i) seeds.push_back(1 + i);
   const int studies = static_cast<int>(seeds.size());
   // Cells per row: the full tier allows rows four times larger.
-  const long budget2 = options.full ? 2'000'000 : 600'000, budget3 = options.full ? 600'000 : 60'000;
+  const long budget2 = options.full ? 2'000'000 : 600'000, budget3 = options.full ? 1'500'000 : 60'000;
   CaseResult result;
   Table table("random Poisson studies (rows refine the first tree; pre-asymptotic studies get more rows)",
               {"seed", "dim", "boundary", "tree", "levels", "order p", "order dp/dn", "finest err p",
                "alg share", "diagnosis", "seconds"});
-  int converged = 0;
+  int converged = 0, meets = 0;
   std::vector<std::string> others;
   for (const std::uint64_t seed : seeds) {
     // About two studies in three are 2D (the 3D ones cost more a row).
@@ -374,24 +382,29 @@ CaseResult run(const CaseOptions& options) {
     fmt::print("  study {} ({}D): {}, {:.1f} s\n", seed, three ? 3 : 2, std::get<std::string>(o.row[9]),
                std::get<double>(o.row[10]));
     std::fflush(stdout);
-    if (o.converged)
-      ++converged;
-    else
-      others.push_back(o.reason);
+    converged += o.converged ? 1 : 0;
+    meets += o.meets ? 1 : 0;
+    if (!o.converged) others.push_back(o.reason);
   }
   result.tables.push_back(std::move(table));
-  const double share = double(converged) / studies;
+  const double share = double(meets) / studies;
   result.fields.set("studies", long(studies));
   result.fields.set("converged", long(converged));
-  result.fields.set("converged_share", share);
+  result.fields.set("meets_orders", long(meets));
+  result.fields.set("meets_share", share);
   result.gate.push_back({"studies converged", GateFigure::Kind::count, double(converged)});
+  result.gate.push_back({"studies reaching the orders", GateFigure::Kind::count, double(meets)});
   const double floor = options.full ? 0.95 : 1.0;
-  result.expect(share >= floor, fmt::format("{} of {} studies converge ({:.0f}%), below {:.0f}%", converged,
-                                            studies, 100 * share, 100 * floor));
-  result.notes.push_back(
-      fmt::format("{} of {} random studies converge at p >= {:g} and dp/dn >= {:g} ({:.0f}%) after "
-                  "pre-asymptotic re-runs",
-                  converged, studies, kSchemeOrderFloor, kSchemeGradOrderFloor, 100 * share));
+  result.expect(
+      share >= floor,
+      fmt::format("{} of {} studies reach p >= {:g} and dp/dn >= {:g} ({:.0f}%), below "
+                  "{:.0f}%",
+                  meets, studies, kSchemeOrderFloor, kSchemeGradOrderFloor, 100 * share, 100 * floor));
+  result.notes.push_back(fmt::format(
+      "{} of {} random studies reach p >= {:g} and dp/dn >= {:g} ({:.0f}%) after pre-asymptotic re-runs; {} "
+      "of "
+      "them converge at the scheme's order, {} stay above it (pre-asymptotic from above at the budget)",
+      meets, studies, kSchemeOrderFloor, kSchemeGradOrderFloor, 100 * share, converged, meets - converged));
   for (const auto& r : others) result.warnings.push_back(r);
   return result;
 }
