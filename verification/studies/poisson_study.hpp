@@ -53,8 +53,8 @@ struct PoissonStudy {
   int max_jump = 2;
   mac::PoissonOptions discretisation;
   /// With discretisation.nullspace = pin: spread the discrete incompatibility as a uniform source
-  /// (a second solve, mac::make_compatible) rather than leave it at the pinned cell, where its point
-  /// source costs dp/dn an order near the pin.
+  /// (a second solve, mac::make_compatible) rather than leave it at the pinned cell as a point source
+  /// (why: docs/findings/poisson-trust.md).
   bool spread_pin_source = true;
   linalg::SolveOptions solver{linalg::SolverKind::bicgstab_ilut, 1e-10, 20000};
   /// The solver's error kept below `algebraic_bound` of each row's error (see AlgebraicControl).
