@@ -240,19 +240,46 @@ rbf::Status stencil_weights(std::vector<StencilNode<Dim>>& nodes, const Vec<Dim>
     return cache != nullptr ? cache->weights(xs, at, h, op, config, w)
                             : rbf::weights<Dim>(xs, at, op, config, w);
   };
-  for (int attempt = 0; attempt < 4; ++attempt) {
+  // An interface passing a few thousandths of a cell from the anchor puts the crossings of many
+  // segments within a hundredth of a cell of each other: a cluster of nearly equal known nodes that
+  // no drop of the farthest node cures. A singular system first loses the known node of its closest
+  // pair, while that pair is closer than a tenth of the stencil's scale; then the farthest nodes.
+  const double scale = h > 0.0 ? h : (nodes.empty() ? 0.0 : (nodes.back().x - at).norm());
+  const auto clustered_known_node = [&]() -> std::ptrdiff_t {
+    double best = std::pow(0.1 * scale, 2);
+    std::ptrdiff_t drop = -1;
+    for (std::size_t a = 0; a < nodes.size(); ++a)
+      for (std::size_t b = 0; b < a; ++b) {
+        if (nodes[a].dof >= 0 && nodes[b].dof >= 0) continue;
+        const double d2 = (nodes[a].x - nodes[b].x).squaredNorm();
+        if (d2 < best) {
+          best = d2;
+          drop = static_cast<std::ptrdiff_t>(nodes[a].dof < 0 ? a : b);
+        }
+      }
+    return drop;
+  };
+  int farthest_drops = 0;
+  for (;;) {
     const rbf::Status st = solve();
     if (st.usable()) return st;
-    if (st.info == rbf::Info::coincident_nodes && st.node_b > 0) {
+    if (st.info == rbf::Info::coincident_nodes && st.node_b > 0 && farthest_drops < 4) {
       nodes.erase(nodes.begin() + st.node_b);  // keep the nearer of the two
+      ++farthest_drops;
     } else if (st.info == rbf::Info::singular_system && nodes.size() > 2) {
-      nodes.pop_back();  // drop the farthest node
+      if (const std::ptrdiff_t k = clustered_known_node(); k >= 0) {
+        nodes.erase(nodes.begin() + k);
+      } else if (farthest_drops < 4) {
+        nodes.pop_back();  // drop the farthest node
+        ++farthest_drops;
+      } else {
+        return st;
+      }
     } else {
       return st;
     }
     ++n_retried;
   }
-  return solve();
 }
 
 template void gather_stencil<2>(const tree::CellGraph<2>&, const DofLayout<2>&, const Boundary<2>&,

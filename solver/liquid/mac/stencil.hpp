@@ -53,8 +53,10 @@ void gather_stencil(const tree::CellGraph<Dim>& graph, const DofLayout<Dim>& lay
                     const Boundary<Dim>& boundary, std::span<const tree::CellId> seeds, const Vec<Dim>& at,
                     StencilRule rule, int n_target, int n_cap, std::vector<StencilNode<Dim>>& out);
 
-/// Weights `w` of `op` at `at` on `nodes`, dropping an offending node and retrying (up to 4 times)
-/// when the local system is unusable; `n_retried` counts the drops. With a cache, the nodes are
+/// Weights `w` of `op` at `at` on `nodes`, dropping an offending node and retrying when the local
+/// system is unusable: a known node of a pair closer than 0.1 h (as often as there are such pairs),
+/// else the second of two coincident nodes or the farthest node (up to 4 times); `n_retried`
+/// counts the drops. With a cache, the nodes are
 /// first put in rbf::canonical_order (so congruent stencils share one solve; the weights follow
 /// their nodes) and looked up at scale `h`. Returns the status of the final attempt.
 template <int Dim>

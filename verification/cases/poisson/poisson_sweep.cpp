@@ -219,7 +219,7 @@ Drawn<Dim> draw_study(std::uint64_t seed, bool full) {
       for (int k = 0; k < Dim; ++k) a[k] = d.uniform(0.18, 0.38) * L;
       const double amin = a.minCoeff();
       s.levelset = [o, a, amin](const Vec<Dim>& x) { return ((x - o).cwiseQuotient(a).norm() - 1.0) * amin; };
-      out.interface = fmt::format("ellipse{} semi-axes {:.3g}", Dim == 3 ? "oid" : "",
+      out.interface = fmt::format("{} semi-axes {:.3g}", Dim == 3 ? "ellipsoid" : "ellipse",
                                   fmt::join(a.data(), a.data() + Dim, ", "));
     } else {
       // An annulus (2D) or a torus about the z axis (3D), signed distances.
