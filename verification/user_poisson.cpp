@@ -20,6 +20,14 @@ namespace liquid::verification {
 
 namespace {
 
+// What a user study accepts: domain sides whose squares and inverse squares stay far inside
+// double's range, finest cells wider than 1e-11 of the coordinates (so that a cell's centre and
+// its faces differ in many digits), and solution values whose squares cannot overflow.
+constexpr double kMinDomainWidth = 1e-50;
+constexpr double kMaxDomainWidth = 1e50;
+constexpr double kMinRelativeCell = 1e-11;
+constexpr double kMaxSolution = 1e100;
+
 std::vector<double> parse_numbers(const std::string& text, const std::string& what) {
   std::vector<double> out;
   std::stringstream ss(text);
@@ -51,6 +59,11 @@ CaseResult run(const UserPoissonArgs& args) {
     domain.hi[k] = box[2 * k + 1];
     LIQUID_VERIFY(std::isfinite(box[2 * k]) && std::isfinite(box[2 * k + 1]) && box[2 * k] < box[2 * k + 1],
                   "--domain: axis {} is empty or inverted ({} .. {})", k, box[2 * k], box[2 * k + 1]);
+    // The study forms squares and inverse squares of lengths: keep them far inside double's range.
+    const double width = box[2 * k + 1] - box[2 * k];
+    LIQUID_VERIFY(width >= kMinDomainWidth && width <= kMaxDomainWidth,
+                  "--domain: axis {} spans {:.3g} ({} .. {}), outside [{:g}, {:g}]", k, width, box[2 * k],
+                  box[2 * k + 1], kMinDomainWidth, kMaxDomainWidth);
   }
   LIQUID_VERIFY(args.bc == "neumann" || args.bc == "dirichlet", "--bc must be neumann or dirichlet, got '{}'",
                 args.bc);
@@ -130,6 +143,16 @@ CaseResult run(const UserPoissonArgs& args) {
   LIQUID_VERIFY(s.level_max + s.finest_offset <= morton::max_level<Dim>,
                 "--levels {}: the finest level {} exceeds {} in {}D", args.levels,
                 s.level_max + s.finest_offset, morton::max_level<Dim>, Dim);
+  // The finest cells must be far wider than the spacing of doubles at the domain's coordinates.
+  for (int k = 0; k < Dim; ++k) {
+    const double h = domain.size()[k] / std::ldexp(1.0, s.level_max + s.finest_offset);
+    const double at = std::max(std::abs(domain.lo[k]), std::abs(domain.hi[k]));
+    LIQUID_VERIFY(
+        h >= kMinRelativeCell * at,
+        "--domain: axis {} ({} .. {}): cells of the finest level {} are {:.3g} wide, below {:g} times "
+        "the coordinates' size: move the domain towards the origin or use fewer levels",
+        k, domain.lo[k], domain.hi[k], s.level_max + s.finest_offset, h, kMinRelativeCell);
+  }
 
   // How far below the measured errors are the numerical f and grad p? GSL's estimates at sample points.
   double f_err = 0.0, g_err = 0.0;
@@ -137,11 +160,20 @@ CaseResult run(const UserPoissonArgs& args) {
     Vec<Dim> x;
     for (int k = 0; k < Dim; ++k)
       x[k] = domain.lo[k] + domain.size()[k] * ((i * (k + 3) * 37 % 64) + 0.5) / 64;
+    // Values past kMaxSolution overflow the squared norms of the errors and residuals: refuse them
+    // here, by name, rather than print NaN orders.
+    const auto bounded = [&](double v, const char* what) {
+      LIQUID_VERIFY(std::abs(v) <= kMaxSolution,
+                    "--exact '{}': |{}| is {:.3g} at ({:.6g}), above {:g}: the study's norms would overflow; "
+                    "scale the solution",
+                    args.exact, what, std::abs(v), fmt::join(x.data(), x.data() + Dim, ", "), kMaxSolution);
+    };
+    bounded(finite((*exact)(x), x, "p"), "p");
     double e = 0.0;
-    exact->laplacian(x, &e);
+    bounded(finite(exact->laplacian(x, &e), x, "f = Lap p"), "f = Lap p");
     f_err = std::max(f_err, e);
     for (int k = 0; k < Dim; ++k) {
-      exact->derivative(x, k, &e);
+      bounded(finite(exact->derivative(x, k, &e), x, "a derivative of p"), "a derivative of p");
       g_err = std::max(g_err, e);
     }
   }

@@ -641,7 +641,17 @@ std::vector<PoissonRun> solve_rows(const PoissonStudy<Dim>& study, CaseResult& r
           cost * kCellBytes * 1e-9, study.max_cells, double(study.max_cells) * kCellBytes * 1e-9, kCellBytes,
           kUnknownCells<Dim>);
     }
-    result.expect(run.solve.converged(), fmt::format("{}level {}: {}", prefix, level, run.solve.describe()));
+    std::string why;
+    const linalg::SolverKind kind = study.solver.kind;
+    if (!run.solve.converged() && run.assembly.n_rbf_rows > 0 &&
+        (kind == linalg::SolverKind::cg_ic || kind == linalg::SolverKind::cg_jacobi ||
+         kind == linalg::SolverKind::cg_amg))
+      why = fmt::format(
+          " (conjugate gradients need a symmetric matrix; this row's {} RBF-FD rows are not "
+          "symmetric: use a BiCGSTAB or GMRES solver)",
+          run.assembly.n_rbf_rows);
+    result.expect(run.solve.converged(),
+                  fmt::format("{}level {}: {}{}", prefix, level, run.solve.describe(), why));
     if (!run.solve.converged()) break;
     if (on_row) on_row(level, run);
     runs.push_back(std::move(run));

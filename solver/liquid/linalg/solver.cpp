@@ -104,6 +104,15 @@ class Iterative final : public LinearSolver {
  public:
   explicit Iterative(SolveOptions options) : options_(options) {}
   static constexpr int max_restarts = 8;
+  static constexpr int max_breakdowns = 2;
+
+  /// The diagonal, infinite where it is zero (the Jacobi step of a breakdown leaves those entries).
+  static Vector diagonal(const SparseMatrix& A) {
+    Vector d = A.diagonal();
+    for (Eigen::Index i = 0; i < d.size(); ++i)
+      if (d[i] == 0.0) d[i] = std::numeric_limits<double>::infinity();
+    return d;
+  }
 
   SolveStats solve(const SparseMatrix& A, const Vector& b, Vector& x) override {
     SolveStats stats;
@@ -117,6 +126,14 @@ class Iterative final : public LinearSolver {
       return stats;
     }
     if (x.size() != b.size()) x = Vector::Zero(b.size());
+    // A zero right-hand side has the zero solution: no Krylov step (its recurrences divide by the
+    // residual's norm and break down).
+    if (b.squaredNorm() == 0.0) {
+      x.setZero();
+      stats.relative_residual = 0.0;
+      stats.info = SolveInfo::converged;
+      return stats;
+    }
     Stopwatch watch;
     const std::uint64_t key = matrix_key(A);
     if (!solver_ || key != key_) {
@@ -141,18 +158,35 @@ class Iterative final : public LinearSolver {
     solver.setMaxIterations(options_.max_iterations);
     stats.setup_seconds = watch.seconds();
     watch.restart();
+    // A guess that already meets the tolerance is the answer (a continued solve started at the
+    // solution would only meet a zero residual, where the recurrences break down).
+    stats.relative_residual = true_residual(A, b, x);
+    if (stats.relative_residual <= options_.tolerance) {
+      stats.solve_seconds = watch.seconds();
+      stats.info = SolveInfo::converged;
+      return stats;
+    }
     // Krylov recurrences drift from the true residual; when the solver stops on its own estimate
     // short of the true one, restart from the current iterate (a few times at most).
     int budget = options_.max_iterations;
+    int breakdowns = 0;
     for (int restart = 0; restart <= max_restarts && budget > 0; ++restart) {
       solver.setMaxIterations(budget);
       Vector result = solver.solveWithGuess(b, x);
       stats.iterations += static_cast<int>(solver.iterations());
       budget -= static_cast<int>(solver.iterations());
       if (!result.allFinite()) {
+        // A breakdown (0/0 in the recurrences: BiCGSTAB's shadow residual orthogonal to A p, met
+        // for instance when b is one unit vector). Restart from the last finite iterate moved by
+        // one Jacobi step, which changes the Krylov space, a few times at most.
+        if (++breakdowns <= max_breakdowns) {
+          const Vector r = b - A * x;
+          x += r.cwiseQuotient(diagonal(A));
+          stats.relative_residual = true_residual(A, b, x);
+          if (x.allFinite()) continue;
+        }
         stats.solve_seconds = watch.seconds();
         stats.info = SolveInfo::non_finite;
-        stats.relative_residual = std::numeric_limits<double>::quiet_NaN();
         return stats;
       }
       x = std::move(result);

@@ -42,6 +42,26 @@ TEST(LinearSolvers, EveryKindSolvesAPoissonSystem) {
   }
 }
 
+// A zero right-hand side, and a guess that is already the solution, are answered without a Krylov
+// step: both once broke BiCGSTAB down (0/0) and came back as NaN (a constant manufactured p).
+TEST(LinearSolvers, ZeroRightHandSideAndSolvedGuessNeedNoIteration) {
+  const SparseMatrix A = poisson(16);
+  for (const auto& name : solver_names()) {
+    Vector x = Vector::Constant(A.rows(), 3.0);
+    SolveStats st = solve(A, Vector::Zero(A.rows()), x, {parse_solver(name), 1e-10, 5000});
+    EXPECT_TRUE(st.converged()) << name << ": " << st.describe();
+    EXPECT_TRUE(x.allFinite()) << name;
+    EXPECT_LT(x.lpNorm<Eigen::Infinity>(), 1e-12) << name;
+
+    const Vector x_exact = Vector::Constant(A.rows(), 1.0);
+    const Vector b = A * x_exact;
+    x = x_exact;
+    st = solve(A, b, x, {parse_solver(name), 1e-14, 5000});
+    EXPECT_TRUE(st.converged()) << name << ": " << st.describe();
+    EXPECT_LT((x - x_exact).lpNorm<Eigen::Infinity>(), 1e-12) << name;
+  }
+}
+
 TEST(LinearSolvers, AKeptFactorisationServesATighterSolveAndAChangedMatrixIsFactorisedAgain) {
   SparseMatrix A = poisson(30);
   const Vector x_exact = Vector::LinSpaced(A.rows(), -1.0, 2.0);
