@@ -406,7 +406,7 @@ int run_sph(const Args& a, const std::string& scene_path, scene::Scene<Dim>* loa
       throw Error(fmt::format("{}: the [[fluid]] shapes, less the solids, leave the run no liquid: {}",
                               scene_path, e.what()));
     } catch (const Error& e) {
-      throw RunFailure{fmt::format("seeding failed: {}", e.what())};
+      throw RunFailure{fmt::format("the start of the run (seeding, the first frame) failed: {}", e.what())};
     }
   }
   run_to_end(*run, a);
@@ -436,7 +436,7 @@ int run_scene(const Args& a, const std::string& scene_path) {
       throw Error(fmt::format("{}: the [[fluid]] shapes, less the solids, leave the run no liquid: {}",
                               scene_path, e.what()));
     } catch (const Error& e) {
-      throw RunFailure{fmt::format("seeding failed: {}", e.what())};
+      throw RunFailure{fmt::format("the start of the run (seeding, the first frame) failed: {}", e.what())};
     }
   }
   if (!a.resume.empty()) {

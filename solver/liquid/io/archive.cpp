@@ -3,6 +3,8 @@
 #include <fmt/format.h>
 #include <hdf5.h>
 
+#include <unistd.h>
+
 #include <filesystem>
 #include <utility>
 
@@ -143,9 +145,15 @@ std::string holds(hid_t set) {
 
 ArchiveWriter::ArchiveWriter(std::string path) : path_(std::move(path)) {
   const std::string tmp = path_ + ".tmp";
+  // The file is built in memory and written in one piece by commit() (detail::create_memory_file);
+  // a folder that cannot take it is named now, before anything is stored.
+  const std::filesystem::path folder = std::filesystem::path(tmp).parent_path();
+  const std::string where = folder.empty() ? std::string(".") : folder.string();
+  LIQUID_VERIFY(std::filesystem::is_directory(where) && ::access(where.c_str(), W_OK) == 0,
+                "ArchiveWriter: cannot create {} (does its folder exist and is it writable?)", tmp);
   QuietHdf5 quiet;
-  const hid_t id = H5Fcreate(tmp.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
-  LIQUID_VERIFY(id >= 0, "ArchiveWriter: cannot create {} (does its folder exist and is it writable?)", tmp);
+  const hid_t id = detail::create_memory_file(tmp, "ArchiveWriter");
+  LIQUID_VERIFY(id >= 0, "ArchiveWriter: cannot create the HDF5 file {} in memory", tmp);
   file_ = std::make_unique<detail::ArchiveFile>(id);
 }
 
@@ -251,7 +259,7 @@ void ArchiveWriter::commit() {
   const std::string tmp = path_ + ".tmp";
   {
     QuietHdf5 quiet;
-    LIQUID_VERIFY(H5Fflush(file_->id, H5F_SCOPE_GLOBAL) >= 0, "ArchiveWriter: cannot flush {}", tmp);
+    detail::save_memory_file(file_->id, tmp, "ArchiveWriter");
     const herr_t closed = H5Fclose(std::exchange(file_->id, -1));
     LIQUID_VERIFY(closed >= 0, "ArchiveWriter: cannot close {}", tmp);
   }

@@ -9,9 +9,10 @@
 // fixed-length string of its length + 1 bytes (NUL-terminated for other readers; the length is
 // exact for ours, so strings may hold any bytes).
 //
-// ArchiveWriter writes PATH.tmp and renames it to PATH only in commit(), so a run killed while
-// writing a checkpoint leaves the previous PATH intact; a writer destroyed without commit() removes
-// PATH.tmp.
+// ArchiveWriter builds the file in memory, writes it whole to PATH.tmp and renames that to PATH
+// only in commit(), so a run killed while writing a checkpoint leaves the previous PATH intact, and a
+// full disk is one error naming the file and the reason; a writer destroyed without commit()
+// removes PATH.tmp.
 
 #include <cstdint>
 #include <memory>
@@ -27,7 +28,8 @@ namespace liquid::io {
 
 class ArchiveWriter {
  public:
-  /// Creates PATH.tmp (PATH's folder must exist); throws liquid::Error naming it when it cannot.
+  /// Starts PATH's file in memory; throws liquid::Error naming PATH.tmp unless PATH's folder exists
+  /// and is writable.
   explicit ArchiveWriter(std::string path);
   ~ArchiveWriter();
   ArchiveWriter(ArchiveWriter&&) noexcept;
@@ -49,7 +51,7 @@ class ArchiveWriter {
   /// Stores a string (any bytes, NUL included).
   void put_string(const std::string& name, const std::string& value);
 
-  /// Flushes and closes PATH.tmp, then renames it to PATH (replacing an older PATH). Once only.
+  /// Writes the file to PATH.tmp, then renames it to PATH (replacing an older PATH). Once only.
   void commit();
 
   const std::string& path() const { return path_; }

@@ -1,11 +1,14 @@
 #include "liquid/io/files.hpp"
 
+#include <fcntl.h>
 #include <unistd.h>
 
 #include <cerrno>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+
+#include <fmt/format.h>
 
 #include "liquid/core/error.hpp"
 
@@ -68,27 +71,41 @@ void check_distinct_outputs(const std::vector<std::pair<std::string, std::string
     }
 }
 
+void write_file(const std::string& path, std::string_view bytes, std::string_view who) {
+  const auto fail = [&](int error, int fd) {
+    if (fd >= 0) ::close(fd);
+    std::error_code ignored;
+    fs::remove(path, ignored);
+    throw Error(fmt::format("{}: cannot write {}: {}", who, path, std::strerror(error)));
+  };
+  const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
+  if (fd < 0) fail(errno, -1);
+  const char* at = bytes.data();
+  std::size_t left = bytes.size();
+  while (left > 0) {
+    const ssize_t n = ::write(fd, at, left);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) fail(n < 0 ? errno : ENOSPC, fd);
+    at += n;
+    left -= static_cast<std::size_t>(n);
+  }
+  // Not synced to the device (a killed process loses nothing the kernel holds); a file system
+  // that reports a full disk only at close is heard here.
+  if (::close(fd) != 0) fail(errno, -1);
+}
+
 void write_text_file(const std::string& path, const std::string& text) {
   const fs::path target(path);
   std::error_code ec;
   if (target.has_parent_path()) fs::create_directories(target.parent_path(), ec);
   LIQUID_VERIFY(!ec, "cannot create the folder of '{}': {}", path, ec.message());
   const fs::path tmp = target.string() + ".part";
-  bool written = false;
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (out.good()) {
-      out << text;
-      out.flush();
-      written = out.good();
-    }
-  }
-  if (written) fs::rename(tmp, target, ec);
-  if (!written || ec) {
+  write_file(tmp.string(), text, "write");
+  fs::rename(tmp, target, ec);
+  if (ec) {
     std::error_code ignored;
     fs::remove(tmp, ignored);
   }
-  LIQUID_VERIFY(written, "cannot write '{}' (disk full, or not writable)", path);
   LIQUID_VERIFY(!ec, "cannot move '{}' to '{}': {}", tmp.string(), path, ec.message());
 }
 

@@ -4,6 +4,7 @@
 // or a stray temporary behind.
 
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -23,5 +24,10 @@ void check_distinct_outputs(const std::vector<std::pair<std::string, std::string
 /// Writes `text` to `path` through `path.part` and a rename (creating parent folders). Throws
 /// liquid::Error naming the path; the temporary is removed on any failure.
 void write_text_file(const std::string& path, const std::string& text);
+
+/// Writes `bytes` to `path` (created or truncated) with the system's own calls. On failure removes `path` and
+/// throws liquid::Error "WHO: cannot write PATH: REASON" (REASON the system's, e.g. "No space left on
+/// device").
+void write_file(const std::string& path, std::string_view bytes, std::string_view who);
 
 }  // namespace liquid::io

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "liquid/core/error.hpp"
+#include "liquid/io/files.hpp"
 
 namespace liquid::io::detail {
 
@@ -49,6 +50,60 @@ class Handle {
  private:
   hid_t id_;
   herr_t (*close_)(hid_t);
+};
+
+/// Creates an HDF5 file held in memory (the core driver without a backing store), to be written to
+/// disk in one piece by save_memory_file(): nothing reaches the disk while datasets are added, so a
+/// full disk is one error from our own write, naming the file and the system's reason, and the
+/// library is never left holding a half-written file it cannot flush or close. -1 on failure.
+inline hid_t create_memory_file(const std::string& path, std::string_view who) {
+  Handle fapl(H5Pcreate(H5P_FILE_ACCESS), H5Pclose);
+  LIQUID_VERIFY(fapl.ok() && H5Pset_fapl_core(fapl.get(), std::size_t{1} << 20, 0) >= 0,
+                "{}: cannot set up the in-memory HDF5 file for {}", who, path);
+  return H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl.get());
+}
+
+/// Writes the in-memory HDF5 file `file` as it stands to `path`; throws naming it (and removes it)
+/// on failure.
+inline void save_memory_file(hid_t file, const std::string& path, std::string_view who) {
+  LIQUID_VERIFY(H5Fflush(file, H5F_SCOPE_GLOBAL) >= 0, "{}: cannot finish the HDF5 file {} in memory", who,
+                path);
+  const ssize_t size = H5Fget_file_image(file, nullptr, 0);
+  LIQUID_VERIFY(size > 0, "{}: cannot read back the HDF5 file {} from memory", who, path);
+  std::string image(static_cast<std::size_t>(size), '\0');
+  LIQUID_VERIFY(H5Fget_file_image(file, image.data(), image.size()) == size,
+                "{}: cannot read back the HDF5 file {} from memory", who, path);
+  write_file(path, image, who);
+}
+
+/// An in-memory HDF5 file (create_memory_file) closed on scope exit.
+class MemoryFile {
+ public:
+  MemoryFile(const std::string& path, std::string_view who) : file_(create_memory_file(path, who), H5Fclose) {
+    LIQUID_VERIFY(file_.ok(), "{}: cannot create the HDF5 file {} in memory", who, path);
+  }
+  hid_t get() const { return file_.get(); }
+  void save(const std::string& path, std::string_view who) const { save_memory_file(file_.get(), path, who); }
+
+ private:
+  Handle file_;
+};
+
+/// Removes the temporaries of a write that did not finish (a throw before release()).
+class TemporaryFiles {
+ public:
+  explicit TemporaryFiles(std::vector<std::string> paths) : paths_(std::move(paths)) {}
+  ~TemporaryFiles() {
+    std::error_code ignored;
+    for (const std::string& p : paths_) std::filesystem::remove(p, ignored);
+  }
+  TemporaryFiles(const TemporaryFiles&) = delete;
+  TemporaryFiles& operator=(const TemporaryFiles&) = delete;
+  /// The write finished: the temporaries have been renamed into place.
+  void release() { paths_.clear(); }
+
+ private:
+  std::vector<std::string> paths_;
 };
 
 /// Creates dataset `name` under `where` with `dims` and writes `data` (which may be null when a
@@ -103,12 +158,9 @@ inline std::string xdmf_document(const std::string& grid) {
          indent(grid, 4) + "\n  </Domain>\n</Xdmf>\n";
 }
 
-/// Writes `text` to `path` (truncating it); throws naming the file when that fails.
+/// Writes `text` to `path` (truncating it); throws naming the file and the reason when that fails.
 inline void write_text(const std::string& path, const std::string& text, std::string_view who) {
-  std::ofstream out(path, std::ios::trunc);
-  out << text;
-  out.close();
-  LIQUID_VERIFY(out.good(), "{}: cannot write {} (does its folder exist and is it writable?)", who, path);
+  write_file(path, text, who);
 }
 
 /// Renames `from` to `to`, replacing `to`; throws naming both when that fails.

@@ -32,16 +32,15 @@ MeshFiles write_mesh(const std::string& stem, std::span<const Vec<Dim>> vertices
     }
   MeshFiles files{stem + ".h5", stem + ".xmf", ""};
   const std::string h5_tmp = files.h5 + ".tmp", xmf_tmp = files.xmf + ".tmp";
+  detail::TemporaryFiles temporaries({h5_tmp, xmf_tmp});
   {
     detail::QuietHdf5 quiet;
-    detail::Handle file(H5Fcreate(h5_tmp.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT), H5Fclose);
-    LIQUID_VERIFY(file.ok(), "write_mesh: cannot create {} (does its folder exist and is it writable?)",
-                  h5_tmp);
+    detail::MemoryFile file(h5_tmp, who);
     detail::write_dataset(file.get(), "geometry", H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE, {nv, Dim},
                           vertices.empty() ? nullptr : vertices.data()->data(), h5_tmp, who);
     detail::write_dataset(file.get(), "topology", H5T_NATIVE_INT64, H5T_STD_I64LE, {ne, Dim},
                           topology.empty() ? nullptr : topology.data(), h5_tmp, who);
-    LIQUID_VERIFY(H5Fflush(file.get(), H5F_SCOPE_GLOBAL) >= 0, "write_mesh: cannot flush {}", h5_tmp);
+    file.save(h5_tmp, who);
   }
   const std::string h5_name = std::filesystem::path(files.h5).filename().string();
   std::string& grid = files.grid;
@@ -57,6 +56,7 @@ MeshFiles write_mesh(const std::string& stem, std::span<const Vec<Dim>> vertices
   detail::write_text(xmf_tmp, detail::xdmf_document(grid), who);
   detail::rename_file(h5_tmp, files.h5, who);
   detail::rename_file(xmf_tmp, files.xmf, who);
+  temporaries.release();
   return files;
 }
 

@@ -44,11 +44,10 @@ PointFiles write_points(const std::string& stem, std::span<const Vec<Dim>> x,
   std::iota(topology.begin(), topology.end(), std::int64_t{0});
 
   const std::string h5_tmp = files.h5 + ".tmp", xmf_tmp = files.xmf + ".tmp";
+  detail::TemporaryFiles temporaries({h5_tmp, xmf_tmp});
   {
     detail::QuietHdf5 quiet;
-    detail::Handle file(H5Fcreate(h5_tmp.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT), H5Fclose);
-    LIQUID_VERIFY(file.ok(), "write_points: cannot create {} (does its folder exist and is it writable?)",
-                  h5_tmp);
+    detail::MemoryFile file(h5_tmp, who);
     detail::write_dataset(file.get(), "geometry", H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE, {n, Dim},
                           x.empty() ? nullptr : x.data()->data(), h5_tmp, who);
     detail::write_dataset(file.get(), "topology", H5T_NATIVE_INT64, H5T_STD_I64LE, {n}, topology.data(),
@@ -63,7 +62,7 @@ PointFiles write_points(const std::string& stem, std::span<const Vec<Dim>> x,
                               h5_tmp, who);
       }
     }
-    LIQUID_VERIFY(H5Fflush(file.get(), H5F_SCOPE_GLOBAL) >= 0, "write_points: cannot flush {}", h5_tmp);
+    file.save(h5_tmp, who);
   }
 
   const std::string h5_name = std::filesystem::path(files.h5).filename().string();
@@ -89,6 +88,7 @@ PointFiles write_points(const std::string& stem, std::span<const Vec<Dim>> x,
   detail::write_text(xmf_tmp, detail::xdmf_document(grid), who);
   detail::rename_file(h5_tmp, files.h5, who);
   detail::rename_file(xmf_tmp, files.xmf, who);
+  temporaries.release();
   return files;
 }
 

@@ -71,11 +71,10 @@ TreeFiles write_tree(const std::string& stem, const tree::CellGraph<Dim>& graph,
   }
 
   const std::string h5_tmp = files.h5 + ".tmp", xmf_tmp = files.xmf + ".tmp";
+  detail::TemporaryFiles temporaries({h5_tmp, xmf_tmp});
   {
     QuietHdf5 quiet;
-    Handle file(H5Fcreate(h5_tmp.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT), H5Fclose);
-    LIQUID_VERIFY(file.ok(), "write_tree: cannot create {} (does its folder exist and is it writable?)",
-                  h5_tmp);
+    detail::MemoryFile file(h5_tmp, who);
     write_dataset(file.get(), "geometry", H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE, {n * n_corners, Dim},
                   geometry.data(), h5_tmp);
     write_dataset(file.get(), "topology", H5T_NATIVE_INT64, H5T_STD_I64LE, {n, n_corners}, topology.data(),
@@ -91,7 +90,7 @@ TreeFiles write_tree(const std::string& stem, const tree::CellGraph<Dim>& graph,
         write_dataset(group.get(), f.name, H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE, {n}, values.data(), h5_tmp);
       }
     }
-    LIQUID_VERIFY(H5Fflush(file.get(), H5F_SCOPE_GLOBAL) >= 0, "write_tree: cannot flush {}", h5_tmp);
+    file.save(h5_tmp, who);
   }
 
   const std::string h5_name = std::filesystem::path(files.h5).filename().string();
@@ -118,6 +117,7 @@ TreeFiles write_tree(const std::string& stem, const tree::CellGraph<Dim>& graph,
   detail::write_text(xmf_tmp, detail::xdmf_document(grid), who);
   detail::rename_file(h5_tmp, files.h5, who);
   detail::rename_file(xmf_tmp, files.xmf, who);
+  temporaries.release();
   return files;
 }
 

@@ -32,8 +32,9 @@ std::string file_stem(const std::string& out, const std::string& name, const cha
 void put_run_settings(io::ArchiveWriter& w, const RunSettings& settings, const std::string& scene_path);
 /// Reads what put_run_settings() wrote into `settings` (the interval only when settings has none).
 void get_run_settings(const io::ArchiveReader& r, RunSettings& settings);
-/// The frames of a series under run/series/.
+/// The frames of a series under run/series/; get_series() leads the frames' file references from
+/// `out` (the resumed run's folder) to the checkpoint's folder when the two differ.
 void put_series(io::ArchiveWriter& w, const io::SeriesWriter* series);
-std::vector<io::SeriesFrame> get_series(const io::ArchiveReader& r);
+std::vector<io::SeriesFrame> get_series(const io::ArchiveReader& r, const std::string& out);
 
 }  // namespace liquid::scene::detail

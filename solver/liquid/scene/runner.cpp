@@ -131,7 +131,31 @@ void put_series(io::ArchiveWriter& w, const io::SeriesWriter* series) {
   w.put("run/series/times", std::span<const double>(times));
 }
 
-std::vector<io::SeriesFrame> get_series(const io::ArchiveReader& r) {
+namespace {
+
+/// `grid` with every reference to an HDF5 file of the folder it was written in (">NAME.h5:/...")
+/// led through `prefix` ("../run1/").
+std::string relocate_references(const std::string& grid, const std::string& prefix) {
+  std::string out;
+  std::size_t at = 0;
+  for (;;) {
+    const std::size_t open = grid.find('>', at);
+    if (open == std::string::npos) break;
+    const std::size_t colon = grid.find(".h5:/", open);
+    const std::size_t close = grid.find('<', open);
+    out.append(grid, at, open + 1 - at);
+    at = open + 1;
+    if (colon != std::string::npos && colon < close &&
+        grid.find_first_of("/\\", open + 1) > colon)  // a bare file name
+      out += prefix;
+  }
+  out.append(grid, at, std::string::npos);
+  return out;
+}
+
+}  // namespace
+
+std::vector<io::SeriesFrame> get_series(const io::ArchiveReader& r, const std::string& out) {
   std::vector<io::SeriesFrame> frames;
   const std::vector<double> times = r.doubles("run/series/times");
   for (std::size_t f = 0; f < times.size(); ++f) {
@@ -142,6 +166,17 @@ std::vector<io::SeriesFrame> get_series(const io::ArchiveReader& r) {
       else
         frame.grids.back() += ch;
     frames.push_back(std::move(frame));
+  }
+  // Resumed into another folder (--out): the earlier frames' files stay where the checkpoint is,
+  // and the new series reaches them through a relative path, so that it opens whole.
+  namespace fs = std::filesystem;
+  std::error_code e1, e2;
+  const fs::path from = fs::weakly_canonical(fs::absolute(r.path()).parent_path(), e1);
+  const fs::path to = fs::weakly_canonical(fs::absolute(out), e2);
+  if (!e1 && !e2 && from != to) {
+    const std::string prefix = from.lexically_relative(to).generic_string() + "/";
+    for (io::SeriesFrame& f : frames)
+      for (std::string& g : f.grids) g = relocate_references(g, prefix);
   }
   return frames;
 }
@@ -489,7 +524,7 @@ SceneRunner<Dim> SceneRunner<Dim>::resume(const std::string& checkpoint, RunSett
   run.sum_fluid_ = sums[0], run.sum_cells_ = sums[1], run.sum_particles_ = sums[2];
   run.sum_regular_cells_ = sums[3], run.sum_regular_particles_ = sums[4];
   if (run.io_->series) {
-    std::vector<io::SeriesFrame> frames = detail::get_series(r);
+    std::vector<io::SeriesFrame> frames = detail::get_series(r, run.settings_.out);
     if (!frames.empty()) run.io_->series->restore(std::move(frames));
   }
   return run;

@@ -275,7 +275,7 @@ SphSceneRunner<Dim> SphSceneRunner<Dim>::resume(const std::string& checkpoint, R
   run.rested_ = counts[6], run.max_compression_ = sums[3];
   run.sum_per_level_ = per_level;
   if (run.io_->series) {
-    std::vector<io::SeriesFrame> frames = detail::get_series(r);
+    std::vector<io::SeriesFrame> frames = detail::get_series(r, run.settings_.out);
     if (!frames.empty()) run.io_->series->restore(std::move(frames));
   }
   return run;
