@@ -495,8 +495,8 @@ sph::SphOptions<Dim> sph_options(const Scene<Dim>& scene) {
   const double shortest = scene.domain.size().minCoeff();
   if (!scene.sph_scene.spacing_given) {
     LIQUID_VERIFY(scene.grid_given,
-                  "{}: the SPH particles need a spacing: give sph.spacing (or a [grid] whose finest cell, "
-                  "halved, sets it)",
+                  "{}: missing key 'sph.spacing': the SPH particles need a spacing (or a [grid] whose finest "
+                  "cell, halved, sets it)",
                   scene.path);
     o.spacing = 0.5 * std::ldexp(shortest, -scene.pic.finest_level);  // [grid] finest, as a PIC run's
   }
@@ -782,7 +782,7 @@ template <int Dim>
 void read_shapes(const TableReader& top, Scene<Dim>& s) {
   const std::string& path = s.path;
   const auto fluids = top.tables("fluid");
-  LIQUID_VERIFY(!fluids.empty(), "{}: no [[fluid]] shape: the scene holds no liquid", path);
+  LIQUID_VERIFY(!fluids.empty(), "{}: missing table [[fluid]]: the scene holds no liquid", path);
   std::vector<std::pair<levelset::Function<Dim>, Vec<Dim>>> moving;
   for (const toml::table* t : fluids) {
     std::vector<std::string> keys = shape_keys;
