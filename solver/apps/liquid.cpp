@@ -400,11 +400,12 @@ int run_sph(const Args& a, const std::string& scene_path, scene::Scene<Dim>* loa
     fmt::print("  continuing from step {} (t = {:.6g} s)\n", run->solver().steps(), run->solver().time());
   } else {
     echo_sph<Dim>(*loaded, settings, false);
+    const std::string fluid_where = loaded->fluid_where;
     try {
       run = std::make_unique<scene::SphSceneRunner<Dim>>(std::move(*loaded), settings);
     } catch (const InputError& e) {
       throw Error(fmt::format("{}: the [[fluid]] shapes, less the solids, leave the run no liquid: {}",
-                              scene_path, e.what()));
+                              fluid_where, e.what()));
     } catch (const Error& e) {
       throw RunFailure{fmt::format("the start of the run (seeding, the first frame) failed: {}", e.what())};
     }
@@ -430,11 +431,12 @@ int run_scene(const Args& a, const std::string& scene_path) {
     if (scene.sph) return run_sph<Dim>(a, scene_path, &scene);
     check_memory_budget<Dim>(scene, a.memory_gb);
     echo<Dim>(scene, settings, false);
+    const std::string fluid_where = scene.fluid_where;
     try {
       run = std::make_unique<scene::SceneRunner<Dim>>(std::move(scene), settings);
     } catch (const InputError& e) {
       throw Error(fmt::format("{}: the [[fluid]] shapes, less the solids, leave the run no liquid: {}",
-                              scene_path, e.what()));
+                              fluid_where, e.what()));
     } catch (const Error& e) {
       throw RunFailure{fmt::format("the start of the run (seeding, the first frame) failed: {}", e.what())};
     }

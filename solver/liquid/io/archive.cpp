@@ -306,6 +306,17 @@ Handle open_checked(hid_t file, const std::string& path, const std::string& name
   return set;
 }
 
+/// An archive's datasets are stored whole and uncompressed: one claiming more bytes than the file
+/// holds is damaged, and is refused before anything is allocated for it.
+void check_fits(hid_t file, const std::string& path, const std::string& name, hsize_t n, std::size_t size) {
+  hsize_t file_size = 0;
+  LIQUID_VERIFY(H5Fget_filesize(file, &file_size) >= 0, "ArchiveReader: cannot read the size of {}", path);
+  LIQUID_VERIFY(n <= file_size / size,
+                "ArchiveReader: '{}' in {} claims {} values of {} bytes, more than the "
+                "file's {} bytes (a damaged file)",
+                name, path, n, size, file_size);
+}
+
 template <typename T>
 std::vector<T> read_array(hid_t file, const std::string& path, const std::string& name) {
   const Handle set = open_checked(file, path, name, fmt::format("a 1-D array of {}", Element<T>::word));
@@ -313,6 +324,7 @@ std::vector<T> read_array(hid_t file, const std::string& path, const std::string
   hsize_t n = 0;
   LIQUID_VERIFY(space.ok() && H5Sget_simple_extent_dims(space.get(), &n, nullptr) == 1,
                 "ArchiveReader: cannot read the size of '{}' in {}", name, path);
+  check_fits(file, path, name, n, sizeof(T));
   std::vector<T> values(n);
   if (n == 0) return values;
   QuietHdf5 quiet;
@@ -364,6 +376,7 @@ std::string ArchiveReader::string(const std::string& name) const {
   Handle type(H5Dget_type(set.get()), H5Tclose);
   const std::size_t size = type.ok() ? H5Tget_size(type.get()) : 0;
   LIQUID_VERIFY(size > 0, "ArchiveReader: cannot read the string type of '{}' in {}", name, path_);
+  check_fits(file_->id, path_, name, size, 1);
   std::string bytes(size, '\0');
   LIQUID_VERIFY(H5Dread(set.get(), type.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, bytes.data()) >= 0,
                 "ArchiveReader: cannot read '{}' in {}", name, path_);

@@ -233,6 +233,13 @@ void AdaptivePic<Dim>::restore(const PicState<Dim>& s) {
       "PIC: the saved particle fields are incomplete");
   LIQUID_VERIFY(std::isfinite(s.time) && s.time >= 0.0 && s.step >= 0,
                 "PIC: the saved clock (step {}, time {}) is not a run's", s.step, s.time);
+  const auto all_finite = [](const std::vector<double>& v) {
+    return std::all_of(v.begin(), v.end(), [](double x) { return std::isfinite(x); });
+  };
+  LIQUID_VERIFY(all_finite(s.u) && all_finite(s.p), "PIC: a saved face velocity or pressure is not finite");
+  for (std::size_t f = 0; f < s.field_values.size(); ++f)
+    LIQUID_VERIFY(all_finite(s.field_values[f]),
+                  "PIC: saved particle field '{}' holds a value that is not finite", s.field_names[f]);
   graph_ = std::move(graph);
   solid_.clear();
   lattice_.reset();

@@ -267,6 +267,7 @@ void apply_overrides(const SceneOverrides& o, Scene<Dim>& scene) {
                   o.spacing);
     scene.sph_scene.options.spacing = o.spacing;
     scene.sph_scene.spacing_given = true;
+    scene.sph_scene.spacing_where = "--spacing";
   }
   if (o.finest >= 0 && scene.sph)
     LIQUID_VERIFY(

@@ -350,7 +350,10 @@ void read_sph(const TableReader& r, Scene<Dim>& s) {
   SphScene<Dim>& sc = s.sph_scene;
   sph::SphOptions<Dim>& o = sc.options;
   sc.spacing_given = r.has("spacing");
-  if (sc.spacing_given) o.spacing = r.positive("spacing");
+  if (sc.spacing_given) {
+    o.spacing = r.positive("spacing");
+    sc.spacing_where = r.where("spacing");
+  }
   o.max_level = static_cast<int>(r.integer_in("levels", 0, 12, o.max_level));
   o.resample_every = static_cast<int>(r.integer_in("resample_every", 1, 100000, o.resample_every));
   o.resampling.alpha = r.positive("alpha", o.resampling.alpha);
@@ -500,15 +503,18 @@ sph::SphOptions<Dim> sph_options(const Scene<Dim>& scene) {
                   scene.path);
     o.spacing = 0.5 * std::ldexp(shortest, -scene.pic.finest_level);  // [grid] finest, as a PIC run's
   }
+  const std::string from = scene.sph_scene.spacing_where.empty()
+                               ? fmt::format("{}: the spacing from [grid] finest", scene.path)
+                               : scene.sph_scene.spacing_where;
   LIQUID_VERIFY(o.spacing < shortest,
-                "{}: sph.spacing {} is not below the domain's shortest side {}: no particle fits", scene.path,
+                "{}: spacing {} is not below the domain's shortest side {}: no particle fits", from,
                 o.spacing, shortest);
   const double particles = scene.liquid_bounds.volume() / std::pow(o.spacing, Dim);
   constexpr double budget = 5e7;
   LIQUID_VERIFY(particles <= budget,
-                "{}: the liquid at sph.spacing {} would take about {:.3g} particles, over the budget of "
+                "{}: the liquid at spacing {} would take about {:.3g} particles, over the budget of "
                 "{:.0g}: a larger spacing (or a coarser [grid] finest) runs",
-                scene.path, o.spacing, particles, budget);
+                from, o.spacing, particles, budget);
   const double c = sph_sound_speed(scene);
   o.fluid.stiffness = o.fluid.rest_density * c * c;
   o.sources.clear();
@@ -783,6 +789,7 @@ void read_shapes(const TableReader& top, Scene<Dim>& s) {
   const std::string& path = s.path;
   const auto fluids = top.tables("fluid");
   LIQUID_VERIFY(!fluids.empty(), "{}: missing table [[fluid]]: the scene holds no liquid", path);
+  s.fluid_where = fmt::format("{}:{}: [[fluid]]", path, fluids.front()->source().begin.line);
   std::vector<std::pair<levelset::Function<Dim>, Vec<Dim>>> moving;
   for (const toml::table* t : fluids) {
     std::vector<std::string> keys = shape_keys;

@@ -59,6 +59,9 @@ template <int Dim>
 struct SphScene {
   sph::SphOptions<Dim> options;  ///< the [sph] table's values (fluid, levels, resampling, turn, ...)
   bool spacing_given = false;    ///< sph.spacing is in the file (else half the finest cell of [grid])
+  /// Where the spacing came from, for messages: "FILE:LINE: key 'sph.spacing'", "--spacing", or the
+  /// [grid] table's "FILE:LINE: [grid]".
+  std::string spacing_where;
   /// Speed of sound (m/s); 0: ten times the fastest speed the scene can reach, sqrt(v0^2 + 2 |g| H)
   /// with v0 the fastest initial or inflow speed and H the fall from the top of the liquid or of a
   /// source to the bottom of the domain (a turning container: its diagonal). Stiffness k = rho_0 c^2;
@@ -89,6 +92,7 @@ struct Scene {
   std::string description;  ///< one line
   std::string figure;       ///< the paper's figure the scene reproduces ("" if none)
   std::string path;         ///< the file read
+  std::string fluid_where;  ///< "FILE:LINE: [[fluid]]", the first fluid table (for messages)
   Box<Dim> domain{Vec<Dim>::Zero(), Vec<Dim>::Ones()};  ///< the tank: the PIC domain, the SPH container
   Vec<Dim> gravity = pic::PicOptions<Dim>::default_gravity();
   bool adaptive = true;           ///< solver.adaptive: the tree (PIC) or the particle levels (SPH)

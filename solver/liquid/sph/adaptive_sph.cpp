@@ -15,6 +15,12 @@
 
 namespace liquid::sph {
 
+namespace {
+/// A restored density above this many rest densities is a damaged checkpoint (a weakly compressible
+/// liquid stays within about 1% of rest).
+constexpr double kMaxSavedDensity = 100.0;
+}  // namespace
+
 // The cycloidal profile: theta = A (t/T - sin(2 pi t/T) / (2 pi)); its rate and its acceleration
 // are 0 at both ends.
 template <int Dim>
@@ -941,6 +947,28 @@ void AdaptiveSph<Dim>::restore(SphState<Dim> st) {
         q.mass[i] == sizes_.mass_of(q.level[i]),
         "sph: saved particle {} has mass {}, not its level's {} (other fluid constants or spacing?)", i,
         q.mass[i], sizes_.mass_of(q.level[i]));
+    LIQUID_VERIFY(q.radius[i] == sizes_.radius_of<Dim>(q.level[i]),
+                  "sph: saved particle {} has radius {}, not its level's {}", i, q.radius[i],
+                  sizes_.radius_of<Dim>(q.level[i]));
+    // Inside the container (within a tenth of its size), finite, and a density a weakly
+    // compressible liquid can hold: anything else is a damaged checkpoint, not a state to run.
+    const Vec<Dim> slack = 0.1 * options_.container.size();
+    bool inside = true;
+    for (int k = 0; k < Dim; ++k)
+      inside = inside && q.x[i][k] >= options_.container.lo[k] - slack[k] &&
+               q.x[i][k] <= options_.container.hi[k] + slack[k];
+    LIQUID_VERIFY(inside, "sph: saved particle {} at ({:.6g}) lies outside the container", i,
+                  fmt::join(q.x[i].data(), q.x[i].data() + Dim, ", "));
+    LIQUID_VERIFY(q.v[i].allFinite() && q.a[i].allFinite() && q.foot[i].allFinite() &&
+                      std::isfinite(q.drho[i]) && std::isfinite(q.pressure[i]) &&
+                      std::isfinite(q.distance[i]) && std::isfinite(q.elfs[i]),
+                  "sph: saved particle {} has a value that is not finite (velocity, acceleration, footpoint, "
+                  "density rate, pressure, distance or feature size)",
+                  i);
+    const double rho0 = options_.fluid.rest_density;
+    LIQUID_VERIFY(q.density[i] > 0.0 && q.density[i] <= kMaxSavedDensity * rho0,
+                  "sph: saved particle {} has density {}, outside (0, {} rest densities]", i, q.density[i],
+                  kMaxSavedDensity);
   }
   LIQUID_VERIFY(std::isfinite(st.time) && st.time >= 0.0 && st.steps >= 0,
                 "sph: the saved clock is not valid");

@@ -7,6 +7,8 @@
 #include <bit>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <limits>
 
 #include "liquid/core/error.hpp"
@@ -207,6 +209,33 @@ TEST_F(ArchiveTest, WriterRefusesBadUse) {
   expect_error([&] { out.commit(); }, {path("bad.h5"), "closed"});
   expect_error([&] { io::ArchiveWriter lost(path("missing_folder/x.h5")); },
                {"missing_folder", "cannot create"});
+}
+
+// A damaged dataspace (one bit flipped in an array's length, as the checkpoint fuzzer found) claims
+// more values than the file holds: refused by name before anything is allocated for it.
+TEST_F(ArchiveTest, ADamagedLengthIsRefusedBeforeAllocating) {
+  constexpr std::uint64_t n = 4099;
+  {
+    io::ArchiveWriter out(path("damaged.h5"));
+    out.put("a", std::vector<double>(n, 0.5));
+    out.commit();
+  }
+  std::string bytes;
+  {
+    std::ifstream in(path("damaged.h5"), std::ios::binary);
+    bytes.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  std::string length(8, '\0');
+  for (int k = 0; k < 8; ++k) length[k] = static_cast<char>((n >> (8 * k)) & 0xff);
+  const std::size_t at = bytes.find(length);
+  ASSERT_NE(at, std::string::npos);
+  bytes[at + 5] ^= 0x01;  // bit 40: 4099 + 2^40 values
+  {
+    std::ofstream out(path("damaged.h5"), std::ios::binary | std::ios::trunc);
+    out << bytes;
+  }
+  expect_error([&] { (void)io::ArchiveReader(path("damaged.h5")).doubles("a"); },
+               {path("damaged.h5"), "'a'", "more than the file's"});
 }
 
 TEST_F(ArchiveTest, UncommittedWriterLeavesNoFile) {

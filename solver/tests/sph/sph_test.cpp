@@ -532,6 +532,35 @@ double sound_energy_growth(bool kicked, int steps) {
   return energy() / e0;
 }
 
+// Every restored value is checked: a damaged checkpoint (a flipped bit in a density, a radius, a
+// position) is refused naming the particle, never run.
+TEST(AdaptiveSph, RestoreRefusesDamagedParticles) {
+  SphOptions<2> o;
+  o.container = Box<2>{Vec<2>(0, 0), Vec<2>(0.2, 0.2)};
+  o.spacing = 0.02;
+  AdaptiveSph<2> sim(o);
+  sim.seed(levelset::box<2>(Box<2>{Vec<2>(0, 0), Vec<2>(0.2, 0.1)}));
+  const SphState<2> good = sim.state();
+  const auto refused = [&](auto&& damage, const std::string& word) {
+    SphState<2> st = good;
+    damage(st.particles);
+    try {
+      sim.restore(st);
+      ADD_FAILURE() << "restored: " << word;
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("saved particle 3"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find(word), std::string::npos) << e.what();
+    }
+  };
+  refused([](SphParticles<2>& q) { q.density[3] = 3.4e41; }, "density");
+  refused([](SphParticles<2>& q) { q.density[3] = -1.0; }, "density");
+  refused([](SphParticles<2>& q) { q.radius[3] *= 1.0 + 1e-15; }, "radius");
+  refused([](SphParticles<2>& q) { q.x[3][0] = 1e9; }, "outside the container");
+  refused([](SphParticles<2>& q) { q.v[3][1] = std::numeric_limits<double>::quiet_NaN(); }, "not finite");
+  refused([](SphParticles<2>& q) { q.pressure[3] = std::numeric_limits<double>::infinity(); }, "not finite");
+  EXPECT_NO_THROW(sim.restore(good));
+}
+
 TEST(AdaptiveSph, SoundWavesDoNotGrowWithoutDensityDiffusion) {
   // The continuity rate at the kicked velocities makes density and velocity a symplectic Euler pair:
   // sound waves do not grow without any diffusion (kinetic energy is checked, not the total). At the starting
