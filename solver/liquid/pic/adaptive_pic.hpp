@@ -337,6 +337,10 @@ class AdaptivePic {
   std::unique_ptr<rbf::WeightCache<Dim>> weights_;
   // The PPE solver, kept across steps: an AMG solver keeps its hierarchy while the layout stays.
   std::unique_ptr<linalg::LinearSolver> ppe_solver_;
+  /// A box full of liquid makes the PPE a bordered system (zero mean), symmetric but indefinite:
+  /// a conjugate-gradient solver cannot take it, so those steps use BiCGSTAB with the same
+  /// preconditioner (made when first needed).
+  std::unique_ptr<linalg::LinearSolver> bordered_ppe_solver_;
   PhaseTimer timer_;
   double time_ = 0.0;
   long step_ = 0;

@@ -6,15 +6,18 @@
 
 #include <toml++/toml.h>
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <limits>
+#include <memory>
 #include <numbers>
 #include <optional>
 
 #include "liquid/core/error.hpp"
+#include "liquid/scene/expression.hpp"
 
 #ifndef LIQUID_SCENES_DIR
 #define LIQUID_SCENES_DIR "solver/scenes"
@@ -784,13 +787,53 @@ void read_output(const TableReader& top, Scene<Dim>& s) {
 }
 
 /// [[fluid]], [[solid]] and [[source]]: the liquid, the obstacles and the inflows.
+/// A fluid's initial velocity given as Dim expressions in x, y (, z): the field, and its largest
+/// speed over a 17^Dim lattice of the shape's bounding box (inside the shape), where every value
+/// must be finite.
+template <int Dim>
+std::pair<std::function<Vec<Dim>(const Vec<Dim>&)>, double> velocity_expressions(const TableReader& r,
+                                                                                 const toml::array& a,
+                                                                                 const Shape<Dim>& shape) {
+  LIQUID_VERIFY(static_cast<int>(a.size()) == Dim, "{}: expected {} expressions (the scene is {}D), found {}",
+                r.where("velocity"), Dim, Dim, a.size());
+  std::array<std::shared_ptr<const Expression<Dim>>, Dim> e;
+  for (int d = 0; d < Dim; ++d) {
+    LIQUID_VERIFY(a.get(d)->is_string(),
+                  "{}: entry {} is not a string: give every component as a number or every one as an "
+                  "expression in x, y{}",
+                  r.where("velocity"), d + 1, Dim == 3 ? ", z" : "");
+    e[d] = std::make_shared<const Expression<Dim>>(a.get(d)->as_string()->get(),
+                                                   fmt::format("{}, entry {}", r.where("velocity"), d + 1));
+  }
+  const auto field = [e](const Vec<Dim>& x) {
+    Vec<Dim> v;
+    for (int d = 0; d < Dim; ++d) v[d] = (*e[d])(x);
+    return v;
+  };
+  constexpr int n = 16;
+  double speed = 0.0;
+  const Vec<Dim> size = shape.bounds.size();
+  for (long i = 0; i < static_cast<long>(std::pow(n + 1, Dim)); ++i) {
+    Vec<Dim> x;
+    long rest = i;
+    for (int d = 0; d < Dim; ++d, rest /= n + 1)
+      x[d] = shape.bounds.lo[d] + size[d] * double(rest % (n + 1)) / n;
+    if (shape.phi(x) > 0.0) continue;
+    const Vec<Dim> v = field(x);
+    LIQUID_VERIFY(v.allFinite(), "{}: the velocity at ({:.6g}) is not finite ({:.6g})", r.where("velocity"),
+                  fmt::join(x.data(), x.data() + Dim, ", "), fmt::join(v.data(), v.data() + Dim, ", "));
+    speed = std::max(speed, v.norm());
+  }
+  return {field, speed};
+}
+
 template <int Dim>
 void read_shapes(const TableReader& top, Scene<Dim>& s) {
   const std::string& path = s.path;
   const auto fluids = top.tables("fluid");
   LIQUID_VERIFY(!fluids.empty(), "{}: missing table [[fluid]]: the scene holds no liquid", path);
   s.fluid_where = fmt::format("{}:{}: [[fluid]]", path, fluids.front()->source().begin.line);
-  std::vector<std::pair<levelset::Function<Dim>, Vec<Dim>>> moving;
+  std::vector<std::pair<levelset::Function<Dim>, std::function<Vec<Dim>(const Vec<Dim>&)>>> moving;
   for (const toml::table* t : fluids) {
     std::vector<std::string> keys = shape_keys;
     keys.push_back("velocity");
@@ -807,8 +850,16 @@ void read_shapes(const TableReader& top, Scene<Dim>& s) {
       s.liquid_bounds.hi = s.liquid_bounds.hi.cwiseMax(shape.bounds.hi);
     }
     if (r.has("velocity")) {
-      moving.emplace_back(shape.phi, r.vec<Dim>("velocity"));
-      s.max_initial_speed = std::max(s.max_initial_speed, moving.back().second.norm());
+      const toml::array* a = t->get("velocity")->as_array();
+      if (a != nullptr && !a->empty() && a->get(0)->is_string()) {
+        auto [field, speed] = velocity_expressions<Dim>(r, *a, shape);
+        moving.emplace_back(shape.phi, std::move(field));
+        s.max_initial_speed = std::max(s.max_initial_speed, speed);
+      } else {
+        const Vec<Dim> u = r.vec<Dim>("velocity");
+        moving.emplace_back(shape.phi, [u](const Vec<Dim>&) { return u; });
+        s.max_initial_speed = std::max(s.max_initial_speed, u.norm());
+      }
     }
     s.liquid = combine<Dim>(s.liquid, shape);
   }
@@ -816,7 +867,7 @@ void read_shapes(const TableReader& top, Scene<Dim>& s) {
     s.velocity = [moving](const Vec<Dim>& x) {
       Vec<Dim> v = Vec<Dim>::Zero();
       for (const auto& [phi, u] : moving)
-        if (phi(x) < 0.0) v = u;
+        if (phi(x) < 0.0) v = u(x);
       return v;
     };
   for (const toml::table* t : top.tables("solid")) {

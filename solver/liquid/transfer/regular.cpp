@@ -161,7 +161,18 @@ TransferReport linear_to_faces(const tree::CellGraph<Dim>& graph, const RegularL
   if (scheme == RegularScheme::apic) affine = particles.field(particles.field_index("apic"));
   out.reset(graph.face_capacity());
   TransferReport total;
+  // Each face gathers from the particles of the 2 x 3^(Dim-1) cells around it, so a particle is
+  // visited 2 x 3^(Dim-1) times per axis: its stencil (base corner and fractions) is computed once
+  // per axis here instead, and the gather reads it (the same arithmetic, so the same bits).
+  const long n_particles = particles.size();
+  std::vector<IVec<Dim>> bases(static_cast<std::size_t>(n_particles));
+  std::vector<Vec<Dim>> fractions(static_cast<std::size_t>(n_particles));
   for (int k = 0; k < Dim; ++k) {
+    parallel_for(n_particles, [&](long p) {
+      const LinearStencil<Dim> st(lattice, k, particles.x[p]);
+      bases[p] = st.base;
+      fractions[p] = st.t;
+    });
     IVec<Dim> extent;
     long n_faces = 1;
     for (int j = 0; j < Dim; ++j) n_faces *= (extent[j] = lattice.extent(k, j));
@@ -184,17 +195,18 @@ TransferReport linear_to_faces(const tree::CellGraph<Dim>& graph, const RegularL
           IVec<Dim> c = lo;
           while (true) {
             for (std::int32_t p : bins.of(lattice.cell(c))) {
-              const Vec<Dim>& xp = particles.x[p];
-              const LinearStencil<Dim> st(lattice, k, xp);
+              const IVec<Dim>& base = bases[p];
               int corner = 0;
               bool inside = true;
               for (int j = 0; j < Dim; ++j) {
-                const long d = a[j] - st.base[j];
+                const long d = a[j] - base[j];
                 inside = inside && (d == 0 || d == 1);
                 corner |= static_cast<int>(d & 1) << j;
               }
               if (!inside) continue;
-              const double w = st.weight(corner) * (masses.empty() ? 1.0 : masses[p]);
+              const Vec<Dim>& xp = particles.x[p];
+              const double w =
+                  multilinear_weight<Dim>(fractions[p], corner) * (masses.empty() ? 1.0 : masses[p]);
               if (w == 0.0) continue;
               double u = particles.v[p][k];
               if (!affine.empty())

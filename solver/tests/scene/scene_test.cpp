@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <numbers>
 #include <sstream>
 
 #include "liquid/core/error.hpp"
@@ -159,6 +160,29 @@ TEST(Scene, OutputFieldsAndTheRegularGridsSolverAreRead) {
   EXPECT_EQ(s.pic.solver.kind, linalg::SolverKind::cg_jacobi);
   const scene::Scene<2> tree = scene::load_scene<2>(scene::find_scene("pool-2d"));
   EXPECT_EQ(tree.pic.solver.kind, linalg::SolverKind::bicgstab_ilut);
+}
+
+// A fluid's velocity given as expressions in x, y: the field is evaluated where the shape holds the
+// point (the last shape wins), zero elsewhere, and its largest speed over the shape is kept.
+TEST(Scene, VelocityExpressionsGiveTheInitialField) {
+  const std::string dir = temp_folder("velocity");
+  const std::string path = dir + "/velocity.toml";
+  {
+    std::ofstream out(path);
+    out << "[domain]\nlo = [0.0, 0.0]\nhi = [2.0, 2.0]\n[grid]\nfinest = 4\n[time]\nsteps = 2\n"
+           "[[fluid]]\nshape = \"box\"\nlo = [0.0, 0.0]\nhi = [2.0, 1.0]\n"
+           "velocity = [\"sin(pi*x)*y\", \"-2*x\"]\n"
+           "[[fluid]]\nshape = \"sphere\"\ncentre = [1.5, 1.5]\nradius = 0.25\nvelocity = [0.5, 0]\n";
+  }
+  const scene::Scene<2> s = scene::load_scene<2>(path);
+  ASSERT_TRUE(s.velocity);
+  const Vec<2> a(0.25, 0.5);
+  EXPECT_DOUBLE_EQ(s.velocity(a)[0], std::sin(std::numbers::pi * 0.25) * 0.5);
+  EXPECT_DOUBLE_EQ(s.velocity(a)[1], -0.5);
+  EXPECT_DOUBLE_EQ(s.velocity(Vec<2>(1.5, 1.5))[0], 0.5);
+  EXPECT_EQ(s.velocity(Vec<2>(0.5, 1.7)), Vec<2>::Zero());
+  // The largest speed over the box's lattice: at x = 2, y = 1, |(0, -4)| = 4 (above the sphere's 0.5).
+  EXPECT_NEAR(s.max_initial_speed, 4.0, 1e-12);
 }
 
 TEST(Scene, TheMemoryEstimateHoldsTheSeededParticlesAndGrowsWithTheLevel) {
