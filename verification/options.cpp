@@ -134,6 +134,15 @@ void add_study_flags(CLI::App& app, StudyFlags& f) {
       ->check(CLI::ExistingDirectory);
   app.add_option("--methods", f.methods, "flow studies: run only these methods (comma-separated row names)")
       ->delimiter(',');
+  app.add_option("--seed", f.seed, "sampled problems (the SPH resampling and surface cases): the random draws");
+  app.add_option("--particles", f.particles, "sampled problems: how many particles are drawn (100 to 2000000)")
+      ->check(CLI::Range(100L, 2'000'000L));
+  app.add_option("--radius", f.radius, "sph-sphere-surface: the sphere's radius, in the unit box (0.05 to 0.35)")
+      ->check(finite_number)
+      ->check(CLI::Range(0.05, 0.35));
+  app.add_option("--aspect", f.aspect, "sph-flat-surface: the box's width over its height (0.25 to 4)")
+      ->check(finite_number)
+      ->check(CLI::Range(0.25, 4.0));
   app.add_option("--max-cells", f.max_cells, kMaxCellsHelp)->check(CLI::Range(1L, 1'000'000'000'000L));
   app.add_flag("--full", f.full, "use the full suite's extent");
 }
@@ -143,7 +152,8 @@ CaseOptions case_options(const StudyFlags& f, const CaseInfo& info) {
   for (Option o : {Option::levels, Option::max_jump, Option::solver, Option::stencil, Option::rbf_exponent,
                    Option::rbf_degree, Option::gradient_degree, Option::stencil_growth, Option::ring_cap,
                    Option::rows, Option::nullspace, Option::tolerance, Option::algebraic, Option::perturb,
-                   Option::trees, Option::methods})
+                   Option::trees, Option::methods, Option::seed, Option::particles, Option::radius,
+                   Option::aspect})
     if (f.given(o) && !info.accepts_option(o)) refused.push_back(flag_of(o));
   if (!refused.empty()) {
     std::vector<std::string> accepted;
@@ -183,6 +193,10 @@ CaseOptions case_options(const StudyFlags& f, const CaseInfo& info) {
     if (f.methods.empty()) throw Error("--methods: give at least one method");
     o.methods = f.methods;
   }
+  if (f.given(Option::seed)) o.seed = f.seed;
+  if (f.given(Option::particles)) o.particles = f.particles;
+  if (f.given(Option::radius)) o.radius = f.radius;
+  if (f.given(Option::aspect)) o.aspect = f.aspect;
   o.max_cells = f.max_cells;
   o.full = f.full;
   return o;
@@ -209,6 +223,10 @@ std::string echo(const std::string& case_name, const StudyFlags& f) {
   s += show(Option::perturb, name_of(perturb_names, f.perturb));
   s += show(Option::trees, f.trees_dir);
   s += show(Option::methods, fmt::format("{}", fmt::join(f.methods, ",")));
+  s += show(Option::seed, std::to_string(f.seed));
+  s += show(Option::particles, std::to_string(f.particles));
+  s += show(Option::radius, fmt::format("{:g}", f.radius));
+  s += show(Option::aspect, fmt::format("{:g}", f.aspect));
   s += fmt::format(" --max-cells {} --tier {}", f.max_cells, f.full ? "full" : "quick");
   return s;
 }

@@ -43,6 +43,14 @@ const char* flag_of(Option option) {
       return "--trees";
     case Option::methods:
       return "--methods";
+    case Option::seed:
+      return "--seed";
+    case Option::particles:
+      return "--particles";
+    case Option::radius:
+      return "--radius";
+    case Option::aspect:
+      return "--aspect";
   }
   return "?";
 }

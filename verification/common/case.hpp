@@ -4,6 +4,7 @@
 // registers itself with LIQUID_VERIFICATION_CASE.
 
 #include <functional>
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <vector>
@@ -34,7 +35,11 @@ enum class Option {
   algebraic,
   perturb,
   trees,
-  methods
+  methods,
+  seed,
+  particles,
+  radius,
+  aspect
 };
 using OptionSet = std::vector<Option>;
 /// The command-line flag of an option ("--max-jump").
@@ -93,6 +98,10 @@ struct CaseOptions {
   std::optional<Perturbation> perturb;        ///< --perturb first-order
   std::optional<std::string> trees_dir;       ///< --trees DIR: write the trees checked
   std::vector<std::string> methods;           ///< --methods A,B: run only these rows (empty: all)
+  std::optional<std::uint64_t> seed;          ///< --seed N: the random draws of a sampled problem
+  std::optional<long> particles;              ///< --particles N: the size of a sampled problem
+  std::optional<double> radius;               ///< --radius R: a sampled sphere's radius (domain units)
+  std::optional<double> aspect;               ///< --aspect A: a sampled box's width over its height
   long max_cells = 0;                         ///< budget: refuse rows above this many cells (0: no limit)
   bool full = false;                          ///< the full suite's extent rather than the quick one
 };

@@ -959,11 +959,12 @@ void AdaptiveSph<Dim>::restore(SphState<Dim> st) {
                q.x[i][k] <= options_.container.hi[k] + slack[k];
     LIQUID_VERIFY(inside, "sph: saved particle {} at ({:.6g}) lies outside the container", i,
                   fmt::join(q.x[i].data(), q.x[i].data() + Dim, ", "));
+    // The distance and the feature size are infinite until a surface is found: NaN alone is damage.
     LIQUID_VERIFY(q.v[i].allFinite() && q.a[i].allFinite() && q.foot[i].allFinite() &&
-                      std::isfinite(q.drho[i]) && std::isfinite(q.pressure[i]) &&
-                      std::isfinite(q.distance[i]) && std::isfinite(q.elfs[i]),
+                      std::isfinite(q.drho[i]) && std::isfinite(q.pressure[i]) && !std::isnan(q.distance[i]) &&
+                      !std::isnan(q.elfs[i]),
                   "sph: saved particle {} has a value that is not finite (velocity, acceleration, footpoint, "
-                  "density rate, pressure, distance or feature size)",
+                  "density rate, pressure; or a NaN distance or feature size)",
                   i);
     const double rho0 = options_.fluid.rest_density;
     LIQUID_VERIFY(q.density[i] > 0.0 && q.density[i] <= kMaxSavedDensity * rho0,

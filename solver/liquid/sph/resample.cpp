@@ -126,7 +126,7 @@ struct Pass {
         if ((y - c).squaredNorm() < dd * dd) return true;
       return false;
     };
-    for (int attempt = 0; attempt < 12; ++attempt, d *= 0.8) {
+    for (int attempt = 0; attempt < kSplitTries; ++attempt, d *= kSplitShrink) {
       valid.clear();
       gather(2.0 * d);
       for (int k = 0; k < static_cast<int>(dirs.size()); ++k) {

@@ -41,6 +41,14 @@ struct ResampleOptions {
   }
 };
 
+/// A split places its two children d = r_child / (2h) from the parent when no other particle is
+/// closer than d to either; else it lowers d by kSplitShrink and tries again, kSplitTries times in
+/// all (then the split is skipped). So no child ever lies closer to another particle than
+/// closest_child_bound() times the nominal d.
+inline constexpr int kSplitTries = 12;
+inline constexpr double kSplitShrink = 0.8;
+inline double closest_child_bound() { return std::pow(kSplitShrink, kSplitTries - 1); }
+
 struct ResampleStats {
   long split = 0;          ///< particles split (each into two)
   long merged = 0;         ///< pairs merged (each into one)

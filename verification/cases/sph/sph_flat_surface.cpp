@@ -25,6 +25,9 @@
 // reported (a note when it holds, a warning when not), not asserted. Asserted: before resampling the
 // distance surface is the closest of the three to the faces, within s on average, without stray
 // vertices; after, still without stray vertices. Gated: every mean and max, and the particle count.
+// A user varies the problem with --seed S (the random sample and the splits' turns), --particles N,
+// --aspect A (the box: 0.6 wide along x and 0.6 / A along the other axes, the longer side kept at
+// 0.6) and --radius R (the sphere, 0.05 to 0.35); the gate runs the defaults.
 
 #include <cmath>
 #include <functional>
@@ -61,9 +64,13 @@ struct Solid {
   std::function<bool(const Vec<Dim>&, double)> measured;
 };
 
+/// The box: 0.6 wide along x and 0.6 / aspect along the other axes (the longer side kept at 0.6),
+/// centred in the unit box.
 template <int Dim>
-Solid<Dim> box_solid() {
-  const Box<Dim> box{Vec<Dim>::Constant(0.2), Vec<Dim>::Constant(0.8)};
+Solid<Dim> box_solid(double aspect) {
+  Vec<Dim> half = Vec<Dim>::Constant(0.3 * std::min(1.0, 1.0 / aspect));
+  half[0] = 0.3 * std::min(1.0, aspect);
+  const Box<Dim> box{Vec<Dim>::Constant(0.5) - half, Vec<Dim>::Constant(0.5) + half};
   // A vertex counts when its nearest face point lies at least `margin` from every edge.
   const auto away_from_edges = [box](const Vec<Dim>& v, double margin) {
     int axis = 0;
@@ -75,16 +82,17 @@ Solid<Dim> box_solid() {
       if (d != axis && (v[d] < box.lo[d] + margin || v[d] > box.hi[d] - margin)) return false;
     return true;
   };
-  return {"box", levelset::box<Dim>(box), box, box.volume(), away_from_edges};
+  return {aspect == 1.0 ? std::string("box") : fmt::format("box of aspect {:g}", aspect), levelset::box<Dim>(box),
+          box, box.volume(), away_from_edges};
 }
 
 template <int Dim>
-Solid<Dim> sphere_solid() {
-  const double radius = 0.3;
+Solid<Dim> sphere_solid(double radius) {
   const Vec<Dim> centre = Vec<Dim>::Constant(0.5);
   const double volume =
       Dim == 2 ? std::numbers::pi * radius * radius : 4.0 / 3.0 * std::numbers::pi * std::pow(radius, 3);
-  return {"sphere", levelset::sphere<Dim>(centre, radius),
+  return {radius == 0.3 ? std::string("sphere") : fmt::format("sphere of radius {:g}", radius),
+          levelset::sphere<Dim>(centre, radius),
           Box<Dim>{centre.array() - radius, centre.array() + radius}, volume,
           [](const Vec<Dim>&, double) { return true; }};
 }
@@ -121,13 +129,13 @@ Errors surface_errors(const sph::SphParticles<Dim>& p, SurfaceModel model, const
 template <int Dim>
 CaseResult measure(const Solid<Dim>& solid, const CaseOptions& options) {
   CaseResult result;
-  const long n = Dim == 2 ? (options.full ? 24000 : 6000) : (options.full ? 100000 : 20000);
+  const long n = options.particles.value_or(Dim == 2 ? (options.full ? 24000 : 6000) : (options.full ? 100000 : 20000));
   const Box<Dim>& box = solid.bounds;
   const double s = std::pow(solid.volume / static_cast<double>(n), 1.0 / Dim);
   sph::Sizes sizes;
   sizes.radius = 2.5 * s;
   sph::SphParticles<Dim> p;
-  std::mt19937_64 rng(5 + Dim);
+  std::mt19937_64 rng(options.seed ? *options.seed + Dim : 5 + Dim);
   std::uniform_real_distribution<double> u(0.0, 1.0);
   while (p.size() < n) {
     Vec<Dim> x;
@@ -146,7 +154,7 @@ CaseResult measure(const Solid<Dim>& solid, const CaseOptions& options) {
   // Down-sampling at rest, as AdaptiveSph's resampling steps do it.
   sph::ResampleOptions ro;
   ro.max_level = 4;
-  std::mt19937_64 split_rng(11);
+  std::mt19937_64 split_rng(options.seed ? *options.seed + 11 : 11);
   int passes = 0;
   for (; passes < 10; ++passes) {
     const sph::PointTree<Dim> tree(p.x);
@@ -210,12 +218,12 @@ CaseResult measure(const Solid<Dim>& solid, const CaseOptions& options) {
 
 template <int Dim>
 CaseResult run_box(const CaseOptions& options) {
-  return measure<Dim>(box_solid<Dim>(), options);
+  return measure<Dim>(box_solid<Dim>(options.aspect.value_or(1.0)), options);
 }
 
 template <int Dim>
 CaseResult run_sphere(const CaseOptions& options) {
-  return measure<Dim>(sphere_solid<Dim>(), options);
+  return measure<Dim>(sphere_solid<Dim>(options.radius.value_or(0.3)), options);
 }
 
 }  // namespace
@@ -224,21 +232,21 @@ LIQUID_VERIFICATION_CASE(
     {"sph-flat-surface",
      "distance of the distance-based, Zhu-Bridson and blobby surfaces from a flat face, before "
      "and after adaptive down-sampling (2D, Figs. 5-6)",
-     true, run_box<2>, no_options});
+     true, run_box<2>, {Option::seed, Option::particles, Option::aspect}});
 LIQUID_VERIFICATION_CASE(
     {"sph-flat-surface-3d",
      "distance of the distance-based, Zhu-Bridson and blobby surfaces from a cube's faces, "
      "before and after adaptive down-sampling (3D, Fig. 6)",
-     true, run_box<3>, no_options});
+     true, run_box<3>, {Option::seed, Option::particles, Option::aspect}});
 LIQUID_VERIFICATION_CASE(
     {"sph-sphere-surface",
      "distance of the distance-based, Zhu-Bridson and blobby surfaces from a circle, before and after "
      "adaptive down-sampling (2D, a curved surface)",
-     true, run_sphere<2>, no_options});
+     true, run_sphere<2>, {Option::seed, Option::particles, Option::radius}});
 LIQUID_VERIFICATION_CASE(
     {"sph-sphere-surface-3d",
      "distance of the distance-based, Zhu-Bridson and blobby surfaces from a sphere, before and after "
      "adaptive down-sampling (3D, a curved surface)",
-     true, run_sphere<3>, no_options});
+     true, run_sphere<3>, {Option::seed, Option::particles, Option::radius}});
 
 }  // namespace liquid::verification
