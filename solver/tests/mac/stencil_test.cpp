@@ -146,6 +146,25 @@ std::vector<StencilNode<3>> stencil_by_a_sphere(double gap, double radius, int r
   return nodes;
 }
 
+/// The Laplacian row at the origin (unit cell size) on `nodes` (which the retries may thin), and
+/// what it gives for the quadratic.
+struct LaplacianRow {
+  rbf::Status status;
+  long n_retried = 0;
+  double laplacian = 0.0;
+};
+LaplacianRow laplacian_row(std::vector<StencilNode<3>>& nodes, int degree) {
+  rbf::Config config;
+  config.degree = degree;
+  std::vector<double> w;
+  LaplacianRow row;
+  row.status = stencil_weights<3>(nodes, Vec<3>::Zero(), rbf::Operator<3>::lap(), config, w, row.n_retried,
+                                  nullptr, 1.0);
+  if (row.status.usable())
+    for (std::size_t j = 0; j < nodes.size(); ++j) row.laplacian += w[j] * quadratic(nodes[j].x);
+  return row;
+}
+
 TEST(StencilWeights, ClusteredCrossingsAreThinnedUntilTheRowIsUsable) {
   std::vector<StencilNode<3>> nodes;
   int dof = 0;
@@ -154,38 +173,24 @@ TEST(StencilWeights, ClusteredCrossingsAreThinnedUntilTheRowIsUsable) {
     nodes.push_back(r.known ? StencilNode<3>{x, -1, quadratic(x)} : StencilNode<3>{x, dof++, 0.0});
   }
   ASSERT_EQ(static_cast<int>(nodes.size()) - dof, 27);
-  rbf::Config config;
-  config.degree = 3;
-  std::vector<double> w;
-  long n_retried = 0;
-  const rbf::Status st =
-      stencil_weights<3>(nodes, Vec<3>::Zero(), rbf::Operator<3>::lap(), config, w, n_retried, nullptr, 1.0);
-  ASSERT_TRUE(st.usable()) << st.describe();
-  EXPECT_GT(n_retried, 0);
+  const LaplacianRow row = laplacian_row(nodes, 3);
+  ASSERT_TRUE(row.status.usable()) << row.status.describe();
+  EXPECT_GT(row.n_retried, 0);
   int kept_known = 0;
   for (const auto& nd : nodes) kept_known += nd.dof < 0;
   EXPECT_GE(kept_known, 1);  // the interface is still in the row
   EXPECT_LT(kept_known, 27);
-  double lap = 0.0;
-  for (std::size_t j = 0; j < nodes.size(); ++j) lap += w[j] * quadratic(nodes[j].x);
-  EXPECT_NEAR(lap, quadratic_laplacian, 1e-6);
+  EXPECT_NEAR(row.laplacian, quadratic_laplacian, 1e-6);
 }
 
 TEST(StencilWeights, WellSeparatedCrossingsAreKept) {
   auto nodes = stencil_by_a_sphere(0.45, 20.0, 2);
   const std::size_t before = nodes.size();
-  rbf::Config config;
-  config.degree = 2;
-  std::vector<double> w;
-  long n_retried = 0;
-  const rbf::Status st =
-      stencil_weights<3>(nodes, Vec<3>::Zero(), rbf::Operator<3>::lap(), config, w, n_retried, nullptr, 1.0);
-  ASSERT_TRUE(st.usable()) << st.describe();
-  EXPECT_EQ(n_retried, 0);
+  const LaplacianRow row = laplacian_row(nodes, 2);
+  ASSERT_TRUE(row.status.usable()) << row.status.describe();
+  EXPECT_EQ(row.n_retried, 0);
   EXPECT_EQ(nodes.size(), before);
-  double lap = 0.0;
-  for (std::size_t j = 0; j < nodes.size(); ++j) lap += w[j] * quadratic(nodes[j].x);
-  EXPECT_NEAR(lap, quadratic_laplacian, 1e-8);
+  EXPECT_NEAR(row.laplacian, quadratic_laplacian, 1e-8);
 }
 
 }  // namespace
