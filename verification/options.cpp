@@ -134,10 +134,13 @@ void add_study_flags(CLI::App& app, StudyFlags& f) {
       ->check(CLI::ExistingDirectory);
   app.add_option("--methods", f.methods, "flow studies: run only these methods (comma-separated row names)")
       ->delimiter(',');
-  app.add_option("--seed", f.seed, "sampled problems (the SPH resampling and surface cases): the random draws");
-  app.add_option("--particles", f.particles, "sampled problems: how many particles are drawn (100 to 2000000)")
+  app.add_option("--seed", f.seed,
+                 "sampled problems (the SPH resampling and surface cases): the random draws");
+  app.add_option("--particles", f.particles,
+                 "sampled problems: how many particles are drawn (100 to 2000000)")
       ->check(CLI::Range(100L, 2'000'000L));
-  app.add_option("--radius", f.radius, "sph-sphere-surface: the sphere's radius, in the unit box (0.05 to 0.35)")
+  app.add_option("--radius", f.radius,
+                 "sph-sphere-surface: the sphere's radius, in the unit box (0.05 to 0.35)")
       ->check(finite_number)
       ->check(CLI::Range(0.05, 0.35));
   app.add_option("--aspect", f.aspect, "sph-flat-surface: the box's width over its height (0.25 to 4)")
@@ -149,11 +152,11 @@ void add_study_flags(CLI::App& app, StudyFlags& f) {
 
 CaseOptions case_options(const StudyFlags& f, const CaseInfo& info) {
   std::vector<std::string> refused;
-  for (Option o : {Option::levels, Option::max_jump, Option::solver, Option::stencil, Option::rbf_exponent,
-                   Option::rbf_degree, Option::gradient_degree, Option::stencil_growth, Option::ring_cap,
-                   Option::rows, Option::nullspace, Option::tolerance, Option::algebraic, Option::perturb,
-                   Option::trees, Option::methods, Option::seed, Option::particles, Option::radius,
-                   Option::aspect})
+  for (Option o : {Option::levels,       Option::max_jump,   Option::solver,          Option::stencil,
+                   Option::rbf_exponent, Option::rbf_degree, Option::gradient_degree, Option::stencil_growth,
+                   Option::ring_cap,     Option::rows,       Option::nullspace,       Option::tolerance,
+                   Option::algebraic,    Option::perturb,    Option::trees,           Option::methods,
+                   Option::seed,         Option::particles,  Option::radius,          Option::aspect})
     if (f.given(o) && !info.accepts_option(o)) refused.push_back(flag_of(o));
   if (!refused.empty()) {
     std::vector<std::string> accepted;

@@ -134,9 +134,7 @@ void echo(const scene::Scene<Dim>& s, const scene::RunSettings& settings, bool r
                                o.solver.amg.reuse_factor)
                  : std::string("; a new hierarchy every step"),
              o.continue_on_ppe_failure ? ", going on when it does not converge" : "");
-  const bool cg = o.solver.kind == linalg::SolverKind::cg_jacobi ||
-                  o.solver.kind == linalg::SolverKind::cg_ic || o.solver.kind == linalg::SolverKind::cg_amg;
-  if (cg)
+  if (linalg::needs_symmetric(o.solver.kind))
     fmt::print(
         "              (while the liquid fills the box the PPE is bordered and indefinite: BiCGSTAB with "
         "the same preconditioner solves it)\n");

@@ -3,8 +3,8 @@
 // states its problem at the top, runs its study, fills tables, checks its own expectations and
 // registers itself with LIQUID_VERIFICATION_CASE.
 
-#include <functional>
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>

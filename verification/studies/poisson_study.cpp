@@ -642,10 +642,7 @@ std::vector<PoissonRun> solve_rows(const PoissonStudy<Dim>& study, CaseResult& r
           kUnknownCells<Dim>);
     }
     std::string why;
-    const linalg::SolverKind kind = study.solver.kind;
-    if (!run.solve.converged() && run.assembly.n_rbf_rows > 0 &&
-        (kind == linalg::SolverKind::cg_ic || kind == linalg::SolverKind::cg_jacobi ||
-         kind == linalg::SolverKind::cg_amg))
+    if (!run.solve.converged() && run.assembly.n_rbf_rows > 0 && linalg::needs_symmetric(study.solver.kind))
       why = fmt::format(
           " (conjugate gradients need a symmetric matrix; this row's {} RBF-FD rows are not "
           "symmetric: use a BiCGSTAB or GMRES solver)",

@@ -158,11 +158,6 @@ inline std::string xdmf_document(const std::string& grid) {
          indent(grid, 4) + "\n  </Domain>\n</Xdmf>\n";
 }
 
-/// Writes `text` to `path` (truncating it); throws naming the file and the reason when that fails.
-inline void write_text(const std::string& path, const std::string& text, std::string_view who) {
-  write_file(path, text, who);
-}
-
 /// Renames `from` to `to`, replacing `to`; throws naming both when that fails.
 inline void rename_file(const std::string& from, const std::string& to, std::string_view who) {
   std::error_code ec;

@@ -53,7 +53,7 @@ MeshFiles write_mesh(const std::string& stem, std::span<const Vec<Dim>> vertices
   grid += fmt::format("  <Geometry GeometryType=\"{}\">\n    {}\n  </Geometry>\n", Dim == 2 ? "XY" : "XYZ",
                       detail::data_item(fmt::format("{} {}", nv, Dim), "Float", 8, h5_name + ":/geometry"));
   grid += "</Grid>";
-  detail::write_text(xmf_tmp, detail::xdmf_document(grid), who);
+  write_file(xmf_tmp, detail::xdmf_document(grid), who);
   detail::rename_file(h5_tmp, files.h5, who);
   detail::rename_file(xmf_tmp, files.xmf, who);
   temporaries.release();

@@ -85,7 +85,7 @@ PointFiles write_points(const std::string& stem, std::span<const Vec<Dim>> x,
                           h5_name + ":/fields/" + f.name));
   }
   grid += "</Grid>";
-  detail::write_text(xmf_tmp, detail::xdmf_document(grid), who);
+  write_file(xmf_tmp, detail::xdmf_document(grid), who);
   detail::rename_file(h5_tmp, files.h5, who);
   detail::rename_file(xmf_tmp, files.xmf, who);
   temporaries.release();

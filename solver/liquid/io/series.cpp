@@ -150,7 +150,7 @@ void SeriesWriter::write() const {
   }
   series += "</Grid>";
   const std::string tmp = path_ + ".tmp";
-  detail::write_text(tmp, detail::xdmf_document(series), who);
+  write_file(tmp, detail::xdmf_document(series), who);
   detail::rename_file(tmp, path_, who);
 }
 

@@ -114,7 +114,7 @@ TreeFiles write_tree(const std::string& stem, const tree::CellGraph<Dim>& graph,
   attribute("cell_id", "Int", 4, "/cell_id");
   for (const CellField& f : fields) attribute(f.name, "Float", 8, "/fields/" + f.name);
   grid += "</Grid>";
-  detail::write_text(xmf_tmp, detail::xdmf_document(grid), who);
+  write_file(xmf_tmp, detail::xdmf_document(grid), who);
   detail::rename_file(h5_tmp, files.h5, who);
   detail::rename_file(xmf_tmp, files.xmf, who);
   temporaries.release();

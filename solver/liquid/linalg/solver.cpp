@@ -40,6 +40,23 @@ SolverKind parse_solver(const std::string& name) {
   throw Error(fmt::format("unknown solver '{}'; choose one of: {}", name, fmt::join(solver_names(), ", ")));
 }
 
+bool needs_symmetric(SolverKind kind) {
+  return kind == SolverKind::cg_jacobi || kind == SolverKind::cg_ic || kind == SolverKind::cg_amg;
+}
+
+SolverKind nonsymmetric_counterpart(SolverKind kind) {
+  switch (kind) {
+    case SolverKind::cg_jacobi:
+      return SolverKind::bicgstab_jacobi;
+    case SolverKind::cg_ic:
+      return SolverKind::bicgstab_ilut;
+    case SolverKind::cg_amg:
+      return SolverKind::bicgstab_amg;
+    default:
+      return kind;
+  }
+}
+
 std::string to_string(SolverKind kind) {
   for (const auto& n : kNames)
     if (n.kind == kind) return n.name;

@@ -50,6 +50,12 @@ struct AmgOptions {
 /// "cg-amg". Throws naming the choices.
 SolverKind parse_solver(const std::string& name);
 std::string to_string(SolverKind kind);
+/// Whether `kind` is a conjugate-gradient solver, which needs a symmetric positive (semi)definite
+/// matrix.
+bool needs_symmetric(SolverKind kind);
+/// The BiCGSTAB solver with the preconditioner of a conjugate-gradient `kind` (`kind` itself for any
+/// other): for a symmetric indefinite or nonsymmetric system.
+SolverKind nonsymmetric_counterpart(SolverKind kind);
 std::vector<std::string> solver_names();
 
 struct SolveOptions {

@@ -686,15 +686,13 @@ void AdaptivePic<Dim>::solve_pressure(PicStepReport& r) {
   x.setZero();
   for (long i = 0; i < system_.n_unknowns(); ++i) x[i] = p_[system_.layout.cell_of_dof[i]];
   linalg::LinearSolver* solver = ppe_solver_.get();
-  if (system_.bordered) {
-    linalg::SolveOptions o = options_.solver;
-    if (o.kind == linalg::SolverKind::cg_jacobi) o.kind = linalg::SolverKind::bicgstab_jacobi;
-    if (o.kind == linalg::SolverKind::cg_ic) o.kind = linalg::SolverKind::bicgstab_ilut;
-    if (o.kind == linalg::SolverKind::cg_amg) o.kind = linalg::SolverKind::bicgstab_amg;
-    if (o.kind != options_.solver.kind) {
-      if (!bordered_ppe_solver_) bordered_ppe_solver_ = linalg::make_solver(o);
-      solver = bordered_ppe_solver_.get();
+  if (system_.bordered && linalg::needs_symmetric(options_.solver.kind)) {
+    if (!bordered_ppe_solver_) {
+      linalg::SolveOptions o = options_.solver;
+      o.kind = linalg::nonsymmetric_counterpart(o.kind);
+      bordered_ppe_solver_ = linalg::make_solver(o);
     }
+    solver = bordered_ppe_solver_.get();
   }
   r.ppe = solver->solve(system_.A, system_.b, x);
   if (!solid_.empty()) extend_into_solid(x);

@@ -813,7 +813,8 @@ std::pair<std::function<Vec<Dim>(const Vec<Dim>&)>, double> velocity_expressions
   constexpr int n = 16;
   double speed = 0.0;
   const Vec<Dim> size = shape.bounds.size();
-  for (long i = 0; i < static_cast<long>(std::pow(n + 1, Dim)); ++i) {
+  const long points = static_cast<long>(std::pow(n + 1, Dim));
+  for (long i = 0; i < points; ++i) {
     Vec<Dim> x;
     long rest = i;
     for (int d = 0; d < Dim; ++d, rest /= n + 1)

@@ -961,8 +961,8 @@ void AdaptiveSph<Dim>::restore(SphState<Dim> st) {
                   fmt::join(q.x[i].data(), q.x[i].data() + Dim, ", "));
     // The distance and the feature size are infinite until a surface is found: NaN alone is damage.
     LIQUID_VERIFY(q.v[i].allFinite() && q.a[i].allFinite() && q.foot[i].allFinite() &&
-                      std::isfinite(q.drho[i]) && std::isfinite(q.pressure[i]) && !std::isnan(q.distance[i]) &&
-                      !std::isnan(q.elfs[i]),
+                      std::isfinite(q.drho[i]) && std::isfinite(q.pressure[i]) &&
+                      !std::isnan(q.distance[i]) && !std::isnan(q.elfs[i]),
                   "sph: saved particle {} has a value that is not finite (velocity, acceleration, footpoint, "
                   "density rate, pressure; or a NaN distance or feature size)",
                   i);

@@ -47,7 +47,9 @@ struct ResampleOptions {
 /// closest_child_bound() times the nominal d.
 inline constexpr int kSplitTries = 12;
 inline constexpr double kSplitShrink = 0.8;
-inline double closest_child_bound() { return std::pow(kSplitShrink, kSplitTries - 1); }
+inline double closest_child_bound() {
+  return std::pow(kSplitShrink, kSplitTries - 1);
+}
 
 struct ResampleStats {
   long split = 0;          ///< particles split (each into two)

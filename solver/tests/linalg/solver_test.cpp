@@ -2,6 +2,8 @@
 // and bad input are reported.
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "liquid/core/error.hpp"
 #include "liquid/linalg/amg.hpp"
 #include "liquid/linalg/solver.hpp"
@@ -44,6 +46,37 @@ TEST(LinearSolvers, EveryKindSolvesAPoissonSystem) {
 
 // A zero right-hand side, and a guess that is already the solution, are answered without a Krylov
 // step: both once broke BiCGSTAB down (0/0) and came back as NaN (a constant manufactured p).
+// A bordered (zero-mean) PPE is symmetric but indefinite: each conjugate-gradient kind has a
+// BiCGSTAB counterpart with its preconditioner, which solves such a system where CG does not.
+TEST(LinearSolvers, ConjugateGradientKindsHaveANonsymmetricCounterpart) {
+  for (const auto& name : solver_names()) {
+    const SolverKind kind = parse_solver(name);
+    const SolverKind other = nonsymmetric_counterpart(kind);
+    EXPECT_EQ(needs_symmetric(kind), other != kind) << name;
+    EXPECT_FALSE(needs_symmetric(other)) << name;
+  }
+  EXPECT_EQ(nonsymmetric_counterpart(SolverKind::cg_ic), SolverKind::bicgstab_ilut);
+  // A bordered 1D Neumann Laplacian (indefinite): the counterpart of cg-jacobi converges.
+  const int n = 40;
+  std::vector<Eigen::Triplet<double>> t;
+  for (int i = 0; i < n; ++i) {
+    const double diag = (i == 0 || i == n - 1) ? 1.0 : 2.0;
+    t.emplace_back(i, i, diag);
+    if (i > 0) t.emplace_back(i, i - 1, -1.0);
+    if (i + 1 < n) t.emplace_back(i, i + 1, -1.0);
+    t.emplace_back(i, n, 1.0);
+    t.emplace_back(n, i, 1.0);
+  }
+  SparseMatrix A(n + 1, n + 1);
+  A.setFromTriplets(t.begin(), t.end());
+  Vector b = Vector::Zero(n + 1);
+  for (int i = 0; i < n; ++i) b[i] = std::cos(3.14159265358979 * (i + 0.5) / n);
+  b.head(n).array() -= b.head(n).mean();
+  Vector x;
+  const SolveStats st = solve(A, b, x, {nonsymmetric_counterpart(SolverKind::cg_jacobi), 1e-10, 5000});
+  EXPECT_TRUE(st.converged()) << st.describe();
+}
+
 TEST(LinearSolvers, ZeroRightHandSideAndSolvedGuessNeedNoIteration) {
   const SparseMatrix A = poisson(16);
   for (const auto& name : solver_names()) {

@@ -24,6 +24,13 @@ std::string temp_folder(const std::string& name) {
   return dir.string();
 }
 
+/// Writes `text` as NAME.toml in a fresh temp folder NAME and returns its path.
+std::string scene_file(const std::string& name, const std::string& text) {
+  const std::string path = temp_folder(name) + "/" + name + ".toml";
+  std::ofstream(path) << text;
+  return path;
+}
+
 TEST(Scene, EveryBuiltinSceneLoadsInItsDimension) {
   const auto scenes = scene::builtin_scenes();
   ASSERT_GE(scenes.size(), 14u);  // seven scenes, 2D and 3D
@@ -142,14 +149,11 @@ TEST(Scene, ValuesAndOverridesReachTheSolverOptions) {
 }
 
 TEST(Scene, OutputFieldsAndTheRegularGridsSolverAreRead) {
-  const std::string dir = temp_folder("fields");
-  const std::string path = dir + "/fields.toml";
-  {
-    std::ofstream out(path);
-    out << "[domain]\nlo = [0.0, 0.0]\nhi = [1.0, 1.0]\n[grid]\nfinest = 4\n[solver]\nmethod = \"apic\"\n"
-           "[time]\nsteps = 2\n[output]\nfields = [\"speed\", \"type\"]\n"
-           "[[fluid]]\nshape = \"box\"\nlo = [0.0, 0.0]\nhi = [1.0, 0.5]\n";
-  }
+  const std::string path = scene_file(
+      "fields",
+      "[domain]\nlo = [0.0, 0.0]\nhi = [1.0, 1.0]\n[grid]\nfinest = 4\n[solver]\nmethod = \"apic\"\n"
+      "[time]\nsteps = 2\n[output]\nfields = [\"speed\", \"type\"]\n"
+      "[[fluid]]\nshape = \"box\"\nlo = [0.0, 0.0]\nhi = [1.0, 0.5]\n");
   const scene::Scene<2> s = scene::load_scene<2>(path);
   EXPECT_TRUE(s.output.writes("speed"));
   EXPECT_TRUE(s.output.writes("type"));
@@ -165,15 +169,12 @@ TEST(Scene, OutputFieldsAndTheRegularGridsSolverAreRead) {
 // A fluid's velocity given as expressions in x, y: the field is evaluated where the shape holds the
 // point (the last shape wins), zero elsewhere, and its largest speed over the shape is kept.
 TEST(Scene, VelocityExpressionsGiveTheInitialField) {
-  const std::string dir = temp_folder("velocity");
-  const std::string path = dir + "/velocity.toml";
-  {
-    std::ofstream out(path);
-    out << "[domain]\nlo = [0.0, 0.0]\nhi = [2.0, 2.0]\n[grid]\nfinest = 4\n[time]\nsteps = 2\n"
-           "[[fluid]]\nshape = \"box\"\nlo = [0.0, 0.0]\nhi = [2.0, 1.0]\n"
-           "velocity = [\"sin(pi*x)*y\", \"-2*x\"]\n"
-           "[[fluid]]\nshape = \"sphere\"\ncentre = [1.5, 1.5]\nradius = 0.25\nvelocity = [0.5, 0]\n";
-  }
+  const std::string path =
+      scene_file("velocity",
+                 "[domain]\nlo = [0.0, 0.0]\nhi = [2.0, 2.0]\n[grid]\nfinest = 4\n[time]\nsteps = 2\n"
+                 "[[fluid]]\nshape = \"box\"\nlo = [0.0, 0.0]\nhi = [2.0, 1.0]\n"
+                 "velocity = [\"sin(pi*x)*y\", \"-2*x\"]\n"
+                 "[[fluid]]\nshape = \"sphere\"\ncentre = [1.5, 1.5]\nradius = 0.25\nvelocity = [0.5, 0]\n");
   const scene::Scene<2> s = scene::load_scene<2>(path);
   ASSERT_TRUE(s.velocity);
   const Vec<2> a(0.25, 0.5);

@@ -18,8 +18,8 @@
 // and momentum to 1e-13 of sum m |v| (compensated sums); the centre of mass unmoved to 1e-13 (both
 // operators are symmetric); every child at least d from every other particle
 // unless its split lowered d, and even then at least 0.8^11 d (about 0.086 d: d is lowered by 20% at
-// most 11 times, sph::closest_child_bound); on the lattice no split lowered d. Gated: the conservation errors and
-// the counts.
+// most 11 times, sph::closest_child_bound); on the lattice no split lowered d. Gated: the conservation errors
+// and the counts.
 
 #include <algorithm>
 #include <cmath>
@@ -172,6 +172,8 @@ LIQUID_VERIFICATION_CASE(
     {"sph-resampling-conservation",
      "SPH split and merge on random and lattice configurations (2D and 3D): mass, momentum, "
      "centre of mass, placement",
-     true, run_both, {Option::seed, Option::particles}});
+     true,
+     run_both,
+     {Option::seed, Option::particles}});
 
 }  // namespace liquid::verification
