@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <initializer_list>
+#include <limits>
 #include <map>
 #include <regex>
 
@@ -196,7 +197,16 @@ CaseOptions case_options(const StudyFlags& f, const CaseInfo& info) {
     if (f.methods.empty()) throw Error("--methods: give at least one method");
     o.methods = f.methods;
   }
-  if (f.given(Option::seed)) o.seed = f.seed;
+  if (f.given(Option::seed)) {
+    // Digits only, within 64 bits (a parser for unsigned integers would wrap -3 or saturate 1e23).
+    std::uint64_t seed = 0;
+    const char* end = f.seed.data() + f.seed.size();
+    const auto [at, ec] = std::from_chars(f.seed.data(), end, seed);
+    LIQUID_VERIFY(!f.seed.empty() && ec == std::errc() && at == end,
+                  "--seed '{}': expected a whole number from 0 to {}", f.seed,
+                  std::numeric_limits<std::uint64_t>::max());
+    o.seed = seed;
+  }
   if (f.given(Option::particles)) o.particles = f.particles;
   if (f.given(Option::radius)) o.radius = f.radius;
   if (f.given(Option::aspect)) o.aspect = f.aspect;
@@ -226,7 +236,7 @@ std::string echo(const std::string& case_name, const StudyFlags& f) {
   s += show(Option::perturb, name_of(perturb_names, f.perturb));
   s += show(Option::trees, f.trees_dir);
   s += show(Option::methods, fmt::format("{}", fmt::join(f.methods, ",")));
-  s += show(Option::seed, std::to_string(f.seed));
+  s += show(Option::seed, f.seed);
   s += show(Option::particles, std::to_string(f.particles));
   s += show(Option::radius, fmt::format("{:g}", f.radius));
   s += show(Option::aspect, fmt::format("{:g}", f.aspect));

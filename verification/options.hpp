@@ -29,7 +29,7 @@ struct StudyFlags {
   Perturbation perturb = Perturbation::first_order;
   std::string trees_dir;
   std::vector<std::string> methods;
-  std::uint64_t seed = 0;
+  std::string seed;
   long particles = 0;
   double radius = 0.0, aspect = 1.0;
   long max_cells = 0;
