@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 #include <omp.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -268,6 +269,84 @@ TYPED_TEST(TransferTest, EmptyFacesAreReportedExtrapolatedAndNeverNaN) {
       EXPECT_GE(faces.value[f], lo);
       EXPECT_LE(faces.value[f], hi);
     });
+  }
+}
+
+// The definition the frontier extrapolation must reproduce: each layer visits every unknown face and
+// gives it the mean of the known same-axis faces of its cells and of their face neighbours.
+template <int Dim>
+std::vector<long> extrapolate_by_definition(const tree::CellGraph<Dim>& g, int layers,
+                                            std::vector<double>& value, std::vector<std::uint8_t>& known) {
+  std::vector<long> counts;
+  for (int layer = 0; layer < layers; ++layer) {
+    long unknown = 0;
+    g.for_each_face([&](tree::FaceId f) { unknown += !known[f]; });
+    if (unknown == 0) break;
+    std::vector<std::pair<tree::FaceId, double>> fills;
+    std::vector<tree::CellId> ring, cells;
+    g.for_each_face([&](tree::FaceId f) {
+      if (known[f]) return;
+      cells.clear();
+      for (tree::CellId c : g.face(f).cell) {
+        if (c == tree::no_cell) continue;
+        g.k_ring(c, 1, ring);
+        cells.insert(cells.end(), ring.begin(), ring.end());
+      }
+      std::sort(cells.begin(), cells.end());
+      cells.erase(std::unique(cells.begin(), cells.end()), cells.end());
+      std::vector<tree::FaceId> seen;
+      for (tree::CellId c : cells)
+        for (tree::FaceId h : g.faces(c))
+          if (g.face(h).axis == g.face(f).axis && known[h]) seen.push_back(h);
+      std::sort(seen.begin(), seen.end());
+      seen.erase(std::unique(seen.begin(), seen.end()), seen.end());
+      if (seen.empty()) return;
+      double sum = 0.0;
+      for (tree::FaceId h : seen) sum += value[h];
+      fills.emplace_back(f, sum / static_cast<double>(seen.size()));
+    });
+    for (const auto& [f, v] : fills) value[f] = v, known[f] = 1;
+    counts.push_back(static_cast<long>(fills.size()));
+    if (fills.empty()) break;
+  }
+  return counts;
+}
+
+TYPED_TEST(TransferTest, ExtrapolationVisitsOnlyTheFrontYetMatchesTheDefinition) {
+  constexpr int Dim = TypeParam::value;
+  for (int jump : {1, 3}) {
+    const auto g = random_tree<Dim>(40 + jump, jump);
+    std::mt19937_64 rng(7 + jump);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    // Known faces: those in a ball and, per axis, a few scattered ones, so fronts of different axes
+    // start in different places and meet.
+    std::vector<double> value(g.face_capacity(), 0.0);
+    std::vector<std::uint8_t> known(g.face_capacity(), 0);
+    g.for_each_face([&](tree::FaceId f) {
+      const Vec<Dim> x = g.face_centre(f);
+      if (x.norm() < 0.4 || u(rng) > 0.995) known[f] = 1, value[f] = u(rng);
+    });
+    for (int layers : {1, 3, 1000}) {
+      std::vector<double> v1 = value, v2 = value;
+      std::vector<std::uint8_t> k1 = known, k2 = known;
+      const transfer::ExtrapolationReport r = transfer::extrapolate_faces<Dim>(g, layers, v1, k1);
+      const std::vector<long> counts = extrapolate_by_definition<Dim>(g, layers, v2, k2);
+      EXPECT_EQ(r.filled, counts) << "jump " << jump << ", " << layers << " layers";
+      long unknown = 0, differ = 0;
+      double worst = 0.0;
+      g.for_each_face([&](tree::FaceId f) {
+        unknown += !k1[f];
+        differ += k1[f] != k2[f];
+        worst = std::max(worst, std::abs(v1[f] - v2[f]));
+      });
+      EXPECT_EQ(r.left_unknown, unknown);
+      EXPECT_EQ(differ, 0);
+      // Summation order differs from the definition's (sorted face ids): round-off only.
+      EXPECT_LT(worst, 1e-14);
+      if (layers == 1000) {
+        EXPECT_EQ(unknown, 0);
+      }
+    }
   }
 }
 
