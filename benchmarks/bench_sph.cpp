@@ -1,13 +1,17 @@
-// Adaptive SPH: neighbour search (cell list against k-d tree) and force evaluation per particle, on
-// single-level and three-level particle sets of 100k and 1M particles (2D and 3D). The three-level
+// Adaptive SPH: neighbour search (cell list against k-d tree), force evaluation, and the redistancing
+// and feature-size marches (queue against rounds) per particle, on single-level and three-level
+// particle sets of 100k and 1M particles (2D and 3D). The three-level
 // set stands in for an adaptive one: the box is cut into three slabs along x, of levels 0, 1 and 2,
 // each a jittered lattice at its level's spacing. Items are particles.
 
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
+#include "liquid/sph/distance_surface.hpp"
+#include "liquid/sph/feature_size.hpp"
 #include "liquid/sph/forces.hpp"
 #include "liquid/sph/neighbours.hpp"
 
@@ -86,6 +90,31 @@ void BM_SphForces(benchmark::State& state) {
   state.counters["particles"] = p.size();
 }
 
+/// One redistancing and one feature-size estimate (the every-k-th-step phases of AdaptiveSph) of the
+/// three-level set, whose carried distances are the exact ones to the unit box's faces.
+template <int Dim>
+void BM_SphMarches(benchmark::State& state) {
+  const MarchOrder order = state.range(0) == 1 ? MarchOrder::parallel : MarchOrder::serial;
+  SphParticles<Dim> start = particle_set<Dim>(state.range(1), true);
+  for (int i = 0; i < start.size(); ++i) {
+    double d = 1.0;
+    for (int k = 0; k < Dim; ++k) d = std::min({d, start.x[i][k], 1.0 - start.x[i][k]});
+    start.distance[i] = std::max(d, 0.0);
+  }
+  const PointTree<Dim> tree(start.x);
+  const NeighbourLists lists = find_neighbours<Dim>(tree, start.x, start.radius);
+  for (auto _ : state) {
+    state.PauseTiming();
+    SphParticles<Dim> p = start;
+    state.ResumeTiming();
+    redistance<Dim>(p, lists, tree, 1, 0.5, order);
+    feature_size<Dim>(p, lists, 60.0, nullptr, order);
+    benchmark::DoNotOptimize(p.elfs.data());
+  }
+  state.SetItemsProcessed(state.iterations() * start.size());
+  state.counters["particles"] = start.size();
+}
+
 // Arguments: search (0 cell list, 1 k-d tree), levels (0 one, 1 three), particles.
 BENCHMARK(BM_SphNeighbours<2>)
     ->ArgsProduct({{0, 1}, {0, 1}, {100000, 1000000}})
@@ -106,6 +135,17 @@ BENCHMARK(BM_SphForces<2>)
 BENCHMARK(BM_SphForces<3>)
     ->ArgsProduct({{0, 1}, {100000, 1000000}})
     ->ArgNames({"levels", "n"})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+// Arguments: order (0 queue, 1 rounds), particles.
+BENCHMARK(BM_SphMarches<2>)
+    ->ArgsProduct({{0, 1}, {100000}})
+    ->ArgNames({"rounds", "n"})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+BENCHMARK(BM_SphMarches<3>)
+    ->ArgsProduct({{0, 1}, {100000}})
+    ->ArgNames({"rounds", "n"})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 

@@ -394,14 +394,14 @@ void AdaptiveSph<Dim>::redistance_and_resample(SphStepReport& report) {
   {
     auto t = timer_.scope("redistance");
     report.redistancing =
-        redistance<Dim>(p_, exact, tree_, options_.projection_bisections, options_.disk_radius);
+        redistance<Dim>(p_, exact, tree_, options_.projection_bisections, options_.disk_radius, options_.march);
   }
   report.resampled = true;
   if (!options_.adaptive) return;
   {
     auto t = timer_.scope("elfs");
     if (options_.wall_footpoints) footpoints_onto_walls();
-    report.features = feature_size<Dim>(p_, exact, options_.gamma_degrees);
+    report.features = feature_size<Dim>(p_, exact, options_.gamma_degrees, nullptr, options_.march);
     if (options_.view.active()) {
       const int n = p_.size();
 #pragma omp parallel for schedule(static)

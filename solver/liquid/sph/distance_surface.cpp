@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
-#include <queue>
 
 #include "liquid/core/error.hpp"
 #include "liquid/sph/kernels.hpp"
@@ -116,7 +115,7 @@ std::pair<double, Vec<Dim>> SurfaceField<Dim>::value_gradient(const Vec<Dim>& y)
 
 template <int Dim>
 RedistanceStats redistance(SphParticles<Dim>& p, const NeighbourLists& nbrs, const PointTree<Dim>& tree,
-                           int bisections, double disk) {
+                           int bisections, double disk, MarchOrder order) {
   const int n = p.size();
   LIQUID_VERIFY(nbrs.n_particles() == n && tree.size() == n,
                 "redistance: {} particles, neighbour lists for {}, a tree of {}", n, nbrs.n_particles(),
@@ -165,30 +164,17 @@ RedistanceStats redistance(SphParticles<Dim>& p, const NeighbourLists& nbrs, con
   // The march: each particle keeps the nearest disk among those its neighbours were reached from.
   std::vector<double> dist(n, SphParticles<Dim>::infinity);
   std::vector<int> source(n, -1);
-  using Item = std::pair<double, int>;
-  std::priority_queue<Item, std::vector<Item>, std::greater<>> queue;
   RedistanceStats stats;
   stats.failed = failed;
   for (int i = 0; i < n; ++i)
     if (on_surface[i]) {
       dist[i] = (p.x[i] - centre[i]).norm(), source[i] = i;
-      queue.push({dist[i], i});
       ++stats.projected;
     }
-  while (!queue.empty()) {
-    const auto [d, i] = queue.top();
-    queue.pop();
-    if (d > dist[i]) continue;
-    const int s = source[i];
-    for (int j : nbrs.of(i)) {
-      const Vec<Dim> y = closest_on_disk<Dim>(p.x[j], centre[s], normal[s], disk * p.radius[s]);
-      const double dj = (p.x[j] - y).norm();
-      if (dj < dist[j]) {
-        dist[j] = dj, source[j] = s;
-        queue.push({dj, j});
-      }
-    }
-  }
+  const double band = n > 0 ? 0.5 * *std::min_element(p.radius.begin(), p.radius.end()) : 0.0;
+  march(order, nbrs, dist, source, [&](int j, int s) {
+    return (p.x[j] - closest_on_disk<Dim>(p.x[j], centre[s], normal[s], disk * p.radius[s])).norm();
+  }, band);
   long unreached = 0, propagated = 0;
 #pragma omp parallel for schedule(static) reduction(+ : unreached, propagated)
   for (int i = 0; i < n; ++i) {
@@ -209,8 +195,8 @@ RedistanceStats redistance(SphParticles<Dim>& p, const NeighbourLists& nbrs, con
 template class SurfaceField<2>;
 template class SurfaceField<3>;
 template RedistanceStats redistance<2>(SphParticles<2>&, const NeighbourLists&, const PointTree<2>&, int,
-                                       double);
+                                       double, MarchOrder);
 template RedistanceStats redistance<3>(SphParticles<3>&, const NeighbourLists&, const PointTree<3>&, int,
-                                       double);
+                                       double, MarchOrder);
 
 }  // namespace liquid::sph

@@ -16,7 +16,7 @@
 // normal the surface's at y_i, radius `disk` r_i: the paper's is r_i, AdaptiveSph's default half of it,
 // see SphOptions::disk_radius); a Dijkstra-ordered fast march over the neighbour graph then
 // gives every particle the distance to the nearest disk it is reached from, and that disk's closest
-// point as its footpoint.
+// point as its footpoint (march.hpp: the paper's queue, or rounds of relaxation on all threads).
 
 #include <cstdint>
 #include <span>
@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "liquid/core/types.hpp"
+#include "liquid/sph/march.hpp"
 #include "liquid/sph/neighbours.hpp"
 #include "liquid/sph/sph_particles.hpp"
 
@@ -75,7 +76,7 @@ struct RedistanceStats {
 /// the positions p.x and `nbrs` their neighbour lists.
 template <int Dim>
 RedistanceStats redistance(SphParticles<Dim>& p, const NeighbourLists& nbrs, const PointTree<Dim>& tree,
-                           int bisections = 1, double disk = 0.5);
+                           int bisections = 1, double disk = 0.5, MarchOrder order = MarchOrder::serial);
 
 /// The point of the disk (centre c, unit normal n, radius R) nearest x.
 template <int Dim>

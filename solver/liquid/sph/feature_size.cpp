@@ -1,8 +1,8 @@
 #include "liquid/sph/feature_size.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
-#include <queue>
 
 #include "liquid/core/error.hpp"
 
@@ -10,7 +10,7 @@ namespace liquid::sph {
 
 template <int Dim>
 FeatureStats feature_size(SphParticles<Dim>& p, const NeighbourLists& nbrs, double gamma_degrees,
-                          std::vector<char>* medial_out) {
+                          std::vector<char>* medial_out, MarchOrder order) {
   const int n = p.size();
   LIQUID_VERIFY(nbrs.n_particles() == n, "feature_size: {} particles, neighbour lists for {}", n,
                 nbrs.n_particles());
@@ -47,41 +47,32 @@ FeatureStats feature_size(SphParticles<Dim>& p, const NeighbourLists& nbrs, doub
     if (medial[i]) axis.push_back(p.x[i]), ++stats.medial;
   }
   const PointTree<Dim> axis_tree(axis);
-  std::vector<Vec<Dim>> source(n);
+  // The nearest medial particle of each footpoint near the surface, then the march from them: each
+  // carries its footpoint and that footpoint's lfs.
   std::vector<double> lfs(n, SphParticles<Dim>::infinity);
-  std::fill(p.elfs.begin(), p.elfs.end(), SphParticles<Dim>::infinity);
-  using Item = std::pair<double, int>;
-  std::priority_queue<Item, std::vector<Item>, std::greater<>> queue;
-  // The nearest medial particle of each footpoint (in parallel), then the march (serial).
 #pragma omp parallel for schedule(dynamic, 256)
   for (int i = 0; i < n; ++i)
     if ((p.x[i] - p.foot[i]).norm() < p.radius[i]) lfs[i] = axis_tree.nearest(p.foot[i]).second;
+  std::vector<double> elfs(n, SphParticles<Dim>::infinity);
+  std::vector<int> source(n, -1);
   for (int i = 0; i < n; ++i) {
     const double d = (p.x[i] - p.foot[i]).norm();
     if (!(d < p.radius[i])) continue;
-    source[i] = p.foot[i];
-    p.elfs[i] = d + lfs[i];
-    queue.push({p.elfs[i], i});
+    elfs[i] = d + lfs[i], source[i] = i;
     ++stats.near_surface;
   }
-  while (!queue.empty()) {
-    const auto [e, i] = queue.top();
-    queue.pop();
-    if (e > p.elfs[i]) continue;
-    for (int j : nbrs.of(i)) {
-      const double ej = (p.x[j] - source[i]).norm() + lfs[i];
-      if (ej < p.elfs[j]) {
-        p.elfs[j] = ej, source[j] = source[i], lfs[j] = lfs[i];
-        queue.push({ej, j});
-      }
-    }
-  }
+  const double band = n > 0 ? 0.5 * *std::min_element(p.radius.begin(), p.radius.end()) : 0.0;
+  march(order, nbrs, elfs, source, [&](int j, int s) { return (p.x[j] - p.foot[s]).norm() + lfs[s]; },
+        band);
+  std::copy(elfs.begin(), elfs.end(), p.elfs.begin());
   for (int i = 0; i < n; ++i) stats.unreached += !std::isfinite(p.elfs[i]);
   if (medial_out) *medial_out = std::move(medial);
   return stats;
 }
 
-template FeatureStats feature_size<2>(SphParticles<2>&, const NeighbourLists&, double, std::vector<char>*);
-template FeatureStats feature_size<3>(SphParticles<3>&, const NeighbourLists&, double, std::vector<char>*);
+template FeatureStats feature_size<2>(SphParticles<2>&, const NeighbourLists&, double, std::vector<char>*,
+                                      MarchOrder);
+template FeatureStats feature_size<3>(SphParticles<3>&, const NeighbourLists&, double, std::vector<char>*,
+                                      MarchOrder);
 
 }  // namespace liquid::sph

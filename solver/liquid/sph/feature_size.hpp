@@ -8,10 +8,12 @@
 // branches near the surface); of these, the particles with at least half of their neighbours also
 // across it are kept; a particle without neighbours is medial too. lfs(y_i) is the distance from the
 // footpoint y_i to the nearest medial particle; particles near the surface (|x_i - y_i| < r_i) start a
-// Dijkstra-ordered march over the neighbour graph that carries (y', lfs(y')) inwards.
+// march over the neighbour graph that carries (y', lfs(y')) inwards (march.hpp: the paper's
+// Dijkstra order, or rounds of relaxation on all threads).
 
 #include <vector>
 
+#include "liquid/sph/march.hpp"
 #include "liquid/sph/neighbours.hpp"
 #include "liquid/sph/sph_particles.hpp"
 
@@ -27,6 +29,6 @@ struct FeatureStats {
 /// medial-axis flag of every particle.
 template <int Dim>
 FeatureStats feature_size(SphParticles<Dim>& p, const NeighbourLists& nbrs, double gamma_degrees = 60.0,
-                          std::vector<char>* medial = nullptr);
+                          std::vector<char>* medial = nullptr, MarchOrder order = MarchOrder::serial);
 
 }  // namespace liquid::sph
