@@ -26,16 +26,19 @@ ExtrapolationReport extrapolate_faces(const tree::CellGraph<Dim>& graph, int lay
                 graph.face_capacity());
   ExtrapolationReport report;
   const int n_cells = graph.cell_capacity();
-  std::vector<std::uint8_t> holds(n_cells, 0), near(n_cells, 0);
+  std::vector<std::uint8_t> holds(n_cells, 0), near(n_cells, 0), in_grown(n_cells, 0);
+  // Flags instead of sorting: a face listed once as a candidate (the lists' order is free, each
+  // candidate's value depending on the known faces alone).
+  std::vector<std::uint8_t> listed(graph.face_capacity(), 0);
   // Cells whose `holds` gained bits since the last update.
   std::vector<tree::CellId> grown;
-  long unknown_count = 0;
+  std::vector<tree::FaceId> unknown;
   auto hold = [&](tree::FaceId f) {
     const tree::GraphFace& gf = graph.face(f);
     const auto bit = static_cast<std::uint8_t>(1u << gf.axis);
     for (tree::CellId c : gf.cell) {
       if (c == tree::no_cell || (holds[c] & bit)) continue;
-      grown.push_back(c);
+      if (!in_grown[c]) in_grown[c] = 1, grown.push_back(c);
       holds[c] |= bit;
     }
   };
@@ -43,8 +46,14 @@ ExtrapolationReport extrapolate_faces(const tree::CellGraph<Dim>& graph, int lay
     if (known[f])
       hold(f);
     else
-      ++unknown_count;
+      unknown.push_back(f);
   });
+  long unknown_count = static_cast<long>(unknown.size());
+  // Where the unknown faces are the fewer (an adaptive tree's narrow band of air), the first layer
+  // asks each of them instead: a face is a candidate when a cell within a hop of its cells holds a
+  // known face of its axis. The later layers spread from the faces the first one filled; `near`
+  // then starts empty, which only adds candidates that can be filled anyway.
+  const bool ask_first = 2 * unknown.size() < grown.size();
   std::vector<std::uint8_t> gained(n_cells, 0);
   std::vector<tree::CellId> ring, touched;
   std::vector<tree::FaceId> candidates;
@@ -53,12 +62,12 @@ ExtrapolationReport extrapolate_faces(const tree::CellGraph<Dim>& graph, int lay
   struct Scratch {
     std::vector<tree::CellId> ring, cells;
   };
-  for (int layer = 0; layer < layers && unknown_count > 0; ++layer) {
-    // Spread the grown cells' bits one hop; note which cells' `near` gained which axes.
+  // Spread the grown cells' bits one hop; the candidates are the unknown faces of the cells whose
+  // `near` gained an axis, for the axes gained.
+  auto spread = [&] {
     touched.clear();
-    std::sort(grown.begin(), grown.end());
-    grown.erase(std::unique(grown.begin(), grown.end()), grown.end());
     for (tree::CellId c : grown) {
+      in_grown[c] = 0;
       graph.k_ring(c, 1, ring);
       for (tree::CellId x : ring) {
         const auto add = static_cast<std::uint8_t>(holds[c] & ~near[x]);
@@ -72,11 +81,41 @@ ExtrapolationReport extrapolate_faces(const tree::CellGraph<Dim>& graph, int lay
     candidates.clear();
     for (tree::CellId x : touched) {
       for (tree::FaceId f : graph.faces(x))
-        if (!known[f] && (gained[x] >> graph.face(f).axis & 1u)) candidates.push_back(f);
+        if (!known[f] && !listed[f] && (gained[x] >> graph.face(f).axis & 1u))
+          listed[f] = 1, candidates.push_back(f);
       gained[x] = 0;
     }
-    std::sort(candidates.begin(), candidates.end());
-    candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
+    for (tree::FaceId f : candidates) listed[f] = 0;
+  };
+  // The first layer by asking the unknown faces (see ask_first).
+  auto ask = [&] {
+    std::vector<std::uint8_t> asked(unknown.size(), 0);
+    parallel_for(
+        static_cast<long>(unknown.size()), [] { return std::vector<tree::CellId>{}; },
+        [&](std::vector<tree::CellId>& cells, long i) {
+          const tree::GraphFace& gf = graph.face(unknown[i]);
+          for (tree::CellId c : gf.cell) {
+            if (c == tree::no_cell) continue;
+            graph.k_ring(c, 1, cells);
+            for (tree::CellId x : cells)
+              if (holds[x] >> gf.axis & 1u) {
+                asked[i] = 1;
+                return;
+              }
+          }
+        },
+        [](std::vector<tree::CellId>&) {}, 256);
+    for (tree::CellId c : grown) in_grown[c] = 0;
+    grown.clear();
+    candidates.clear();
+    for (std::size_t i = 0; i < unknown.size(); ++i)
+      if (asked[i]) candidates.push_back(unknown[i]);
+  };
+  for (int layer = 0; layer < layers && unknown_count > 0; ++layer) {
+    if (layer == 0 && ask_first)
+      ask();
+    else
+      spread();
     next.assign(candidates.size(), 0.0);
     filled.assign(candidates.size(), 0);
     parallel_for(

@@ -320,33 +320,37 @@ TYPED_TEST(TransferTest, ExtrapolationVisitsOnlyTheFrontYetMatchesTheDefinition)
     std::uniform_real_distribution<double> u(-1.0, 1.0);
     // Known faces: those in a ball and, per axis, a few scattered ones, so fronts of different axes
     // start in different places and meet.
-    std::vector<double> value(g.face_capacity(), 0.0);
-    std::vector<std::uint8_t> known(g.face_capacity(), 0);
-    g.for_each_face([&](tree::FaceId f) {
-      const Vec<Dim> x = g.face_centre(f);
-      if (x.norm() < 0.4 || u(rng) > 0.995) known[f] = 1, value[f] = u(rng);
-    });
-    for (int layers : {1, 3, 1000}) {
-      std::vector<double> v1 = value, v2 = value;
-      std::vector<std::uint8_t> k1 = known, k2 = known;
-      const transfer::ExtrapolationReport r = transfer::extrapolate_faces<Dim>(g, layers, v1, k1);
-      const std::vector<long> counts = extrapolate_by_definition<Dim>(g, layers, v2, k2);
-      EXPECT_EQ(r.filled, counts) << "jump " << jump << ", " << layers << " layers";
-      long unknown = 0, differ = 0;
-      double worst = 0.0;
-      g.for_each_face([&](tree::FaceId f) {
-        unknown += !k1[f];
-        differ += k1[f] != k2[f];
-        worst = std::max(worst, std::abs(v1[f] - v2[f]));
-      });
-      EXPECT_EQ(r.left_unknown, unknown);
-      EXPECT_EQ(differ, 0);
-      // Summation order differs from the definition's (sorted face ids): round-off only.
-      EXPECT_LT(worst, 1e-14);
-      if (layers == 1000) {
-        EXPECT_EQ(unknown, 0);
+    // Known inside a ball (few known faces: the layers spread from them) or outside it (few unknown:
+    // the first layer asks them, as in an adaptive tree's narrow band of air).
+    for (bool inside : {true, false})
+      for (int layers : {1, 3, 1000}) {
+        std::vector<double> value(g.face_capacity(), 0.0);
+        std::vector<std::uint8_t> known(g.face_capacity(), 0);
+        g.for_each_face([&](tree::FaceId f) {
+          const Vec<Dim> x = g.face_centre(f);
+          if ((x.norm() < 0.4) == inside || u(rng) > 0.995) known[f] = 1, value[f] = u(rng);
+        });
+        std::vector<double> v1 = value, v2 = value;
+        std::vector<std::uint8_t> k1 = known, k2 = known;
+        const transfer::ExtrapolationReport r = transfer::extrapolate_faces<Dim>(g, layers, v1, k1);
+        const std::vector<long> counts = extrapolate_by_definition<Dim>(g, layers, v2, k2);
+        EXPECT_EQ(r.filled, counts) << "jump " << jump << ", " << layers << " layers, known inside "
+                                    << inside;
+        long unknown = 0, differ = 0;
+        double worst = 0.0;
+        g.for_each_face([&](tree::FaceId f) {
+          unknown += !k1[f];
+          differ += k1[f] != k2[f];
+          worst = std::max(worst, std::abs(v1[f] - v2[f]));
+        });
+        EXPECT_EQ(r.left_unknown, unknown);
+        EXPECT_EQ(differ, 0);
+        // Summation order differs from the definition's (sorted face ids): round-off only.
+        EXPECT_LT(worst, 1e-14);
+        if (layers == 1000) {
+          EXPECT_EQ(unknown, 0);
+        }
       }
-    }
   }
 }
 
