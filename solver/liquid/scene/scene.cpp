@@ -386,8 +386,8 @@ void read_sph(const TableReader& r, Scene<Dim>& s) {
   LIQUID_VERIFY(o.neighbour_skin >= 0.0 && o.neighbour_skin <= 10.0, "{}: {} is outside [0, 10] spacings",
                 r.where("neighbour_skin"), o.neighbour_skin);
   o.wall_footpoints = r.boolean("wall_footpoints", o.wall_footpoints);
-  o.march = r.choice("march", {"parallel", "queue"}, o.march == sph::MarchOrder::parallel ? "parallel" : "queue") ==
-                    "parallel"
+  o.march = r.choice("march", {"parallel", "queue"},
+                     o.march == sph::MarchOrder::parallel ? "parallel" : "queue") == "parallel"
                 ? sph::MarchOrder::parallel
                 : sph::MarchOrder::serial;
   o.fluid.mirror_walls = r.boolean("mirror_walls", o.fluid.mirror_walls);

@@ -393,8 +393,8 @@ void AdaptiveSph<Dim>::redistance_and_resample(SphStepReport& report) {
   const NeighbourLists& exact = options_.neighbour_skin > 0.0 ? skinless_ : nbrs_;
   {
     auto t = timer_.scope("redistance");
-    report.redistancing =
-        redistance<Dim>(p_, exact, tree_, options_.projection_bisections, options_.disk_radius, options_.march);
+    report.redistancing = redistance<Dim>(p_, exact, tree_, options_.projection_bisections,
+                                          options_.disk_radius, options_.march);
   }
   report.resampled = true;
   if (!options_.adaptive) return;

@@ -172,9 +172,12 @@ RedistanceStats redistance(SphParticles<Dim>& p, const NeighbourLists& nbrs, con
       ++stats.projected;
     }
   const double band = n > 0 ? 0.5 * *std::min_element(p.radius.begin(), p.radius.end()) : 0.0;
-  march(order, nbrs, dist, source, [&](int j, int s) {
-    return (p.x[j] - closest_on_disk<Dim>(p.x[j], centre[s], normal[s], disk * p.radius[s])).norm();
-  }, band);
+  march(
+      order, nbrs, dist, source,
+      [&](int j, int s) {
+        return (p.x[j] - closest_on_disk<Dim>(p.x[j], centre[s], normal[s], disk * p.radius[s])).norm();
+      },
+      band);
   long unreached = 0, propagated = 0;
 #pragma omp parallel for schedule(static) reduction(+ : unreached, propagated)
   for (int i = 0; i < n; ++i) {

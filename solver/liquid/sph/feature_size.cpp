@@ -62,8 +62,8 @@ FeatureStats feature_size(SphParticles<Dim>& p, const NeighbourLists& nbrs, doub
     ++stats.near_surface;
   }
   const double band = n > 0 ? 0.5 * *std::min_element(p.radius.begin(), p.radius.end()) : 0.0;
-  march(order, nbrs, elfs, source, [&](int j, int s) { return (p.x[j] - p.foot[s]).norm() + lfs[s]; },
-        band);
+  march(
+      order, nbrs, elfs, source, [&](int j, int s) { return (p.x[j] - p.foot[s]).norm() + lfs[s]; }, band);
   std::copy(elfs.begin(), elfs.end(), p.elfs.begin());
   for (int i = 0; i < n; ++i) stats.unreached += !std::isfinite(p.elfs[i]);
   if (medial_out) *medial_out = std::move(medial);

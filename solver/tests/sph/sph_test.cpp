@@ -1188,7 +1188,8 @@ void marches_reach_the_fixed_point() {
   std::vector<double> seed_value(p.size(), SphParticles<Dim>::infinity);
   std::vector<int> seed_source(p.size(), -1);
   for (int i = 0; i < p.size(); ++i)
-    if (p.x[i][0] < 0.15 && u(rng) < 0.5) offset[i] = 0.05 * u(rng), seed_value[i] = offset[i], seed_source[i] = i;
+    if (p.x[i][0] < 0.15 && u(rng) < 0.5)
+      offset[i] = 0.05 * u(rng), seed_value[i] = offset[i], seed_source[i] = i;
   const auto cost = [&](int j, int s) { return (p.x[j] - p.x[s]).norm() + offset[s]; };
   auto run = [&](MarchOrder order, int threads) {
     std::vector<double> value = seed_value;
@@ -1236,8 +1237,12 @@ void marches_reach_the_fixed_point() {
   EXPECT_LE(excess_parallel, excess_serial);
 }
 
-TEST(SphMarch, BothOrdersReachTheFixedPoint2D) { marches_reach_the_fixed_point<2>(); }
-TEST(SphMarch, BothOrdersReachTheFixedPoint3D) { marches_reach_the_fixed_point<3>(); }
+TEST(SphMarch, BothOrdersReachTheFixedPoint2D) {
+  marches_reach_the_fixed_point<2>();
+}
+TEST(SphMarch, BothOrdersReachTheFixedPoint3D) {
+  marches_reach_the_fixed_point<3>();
+}
 
 TEST(SphMarch, RedistancingAndFeatureSizeAgreeBetweenOrders) {
   // A 3D ball (mixed levels are covered above); the distances and elfs of both orders.

@@ -87,7 +87,8 @@ Shape measure(const pic::AdaptivePic<Dim>& sim) {
   // a cell shared between columns in proportion to its overlap.
   for (const Slab& b : slabs)
     for (int c = std::max(0, static_cast<int>(b.lo * kColumns)); c < kColumns && c < b.hi * kColumns; ++c) {
-      const double overlap = std::min(b.hi, (c + 1.0) / kColumns) - std::max(b.lo, c / static_cast<double>(kColumns));
+      const double overlap =
+          std::min(b.hi, (c + 1.0) / kColumns) - std::max(b.lo, c / static_cast<double>(kColumns));
       if (overlap > 0.0) s.height[c] += b.volume * overlap / (b.hi - b.lo) * kColumns;
     }
   // The front: where the last 0.5% of the liquid's volume begins, counted from the far wall (bisection
@@ -163,10 +164,11 @@ CaseResult run(const CaseOptions& options) {
   CaseResult result;
   const char* name = Dim == 2 ? "dam-break-convergence" : "dam-break-convergence-3d";
   const LevelRange range = options.levels.value_or(LevelRange{4, 6});
-  LIQUID_VERIFY(range.first >= 3 && range.last <= (Dim == 2 ? 8 : 6) && range.last > range.first,
-                "{}: --levels {}:{} must be two or more finest levels within 3:{} (the reference runs one level "
-                "finer)",
-                name, range.first, range.last, Dim == 2 ? 8 : 6);
+  LIQUID_VERIFY(
+      range.first >= 3 && range.last <= (Dim == 2 ? 8 : 6) && range.last > range.first,
+      "{}: --levels {}:{} must be two or more finest levels within 3:{} (the reference runs one level "
+      "finer)",
+      name, range.first, range.last, Dim == 2 ? 8 : 6);
   std::vector<int> levels;
   for (int level = range.first; level <= range.last; ++level) levels.push_back(level);
   const std::vector<FlowMethod> methods = chosen_methods(kMethods, options.methods);
@@ -250,10 +252,14 @@ LIQUID_VERIFICATION_CASE(
     {"dam-break-convergence",
      "dam break (2D, levels 4-6, reference at 7): front and surface against a finer reference run, error "
      "against seconds for adaptive RBF, APIC and FLIP",
-     true, run<2>, {Option::levels, Option::methods}});
+     true,
+     run<2>,
+     {Option::levels, Option::methods}});
 LIQUID_VERIFICATION_CASE({"dam-break-convergence-3d",
                           "dam break (3D, levels 4-6, reference at 7): front and surface against a finer "
                           "run, speed at equal error for adaptive RBF, APIC and FLIP",
-                          false, run<3>, {Option::levels, Option::methods}});
+                          false,
+                          run<3>,
+                          {Option::levels, Option::methods}});
 
 }  // namespace liquid::verification
