@@ -9,19 +9,20 @@
 // Exact solution: none. The reference is a run one level finer than the finest row: in 2D regular
 // APIC, an established method independent of the default transfer the adaptive rows run; in 3D the
 // default adaptive run, the best-resolved solution this machine can afford.
-// Measured at t = 0.05, 0.1, 0.15 (the front runs across the tank) and 0.3 s: the front (the largest x of the
-// particles, the 99.5th percentile so that a lone spray particle does not count) and the surface's height
-// profile (over 16 columns across the tank, the 99th percentile of the particles' heights in each). Distance
-// of a run from the reference: the largest, over the four times, of |front - reference front| and the mean
-// over the columns of |height - reference height| (an L1 norm of the profile), in column heights. The
-// profile's largest column difference (L-inf) is reported beside it: at the front's tip the profile is a
-// step, where L-inf does not fall with h (a shift of the tip by one column is a whole column height), so it
-// is not the measure (docs/findings/dam-break-convergence.md). Seconds: the run's wall time to 0.3 s.
-// Expected (asserted): every method's distance falls from the coarsest row to the finest (it converges
-// towards the reference); warned about when it falls by less than a quarter. Reported: each method's
-// distance against seconds (plotted in the report), and the adaptive run's speed at equal distance against
-// the fastest regular method (interpolated in log-log between its rows). Gated: the distance of every
-// method and row (default levels and methods).
+// Measured at t = 0.05, 0.1, 0.15 (the front runs across the tank) and 0.3 s (the run-up), from the
+// solver's fluid cells: the front (where the last 0.5% of their volume begins, counted from the far wall)
+// and the height profile (over 16 columns across the tank, each column's fluid volume over its floor).
+// Distance of a run from the reference: the largest of |front - reference front| over the three times
+// before the front meets the far wall and, over all four, the mean over the columns of |height - reference
+// height| (an L1 norm of the profile), in column heights. The profile's largest column difference (L-inf)
+// is reported beside it: at the front's tip the profile is a step, where L-inf does not fall with h (a
+// shift of the tip by one column is a whole column height), so it is not the measure
+// (docs/findings/dam-break-convergence.md). Seconds: the run's wall time to 0.3 s. Expected (asserted): every
+// method's distance falls from the coarsest row to the finest (it converges towards the reference); warned
+// about when it falls by less than a quarter. Reported: each method's distance against seconds (plotted in
+// the report), and the adaptive run's speed at equal distance against the fastest regular method
+// (interpolated in log-log between its rows). Gated: the distance of every method and row (default levels and
+// methods).
 
 #include <algorithm>
 #include <array>
@@ -47,6 +48,9 @@ namespace {
 constexpr double kTimes[] = {0.05, 0.1, 0.15, 0.3};
 constexpr int kColumns = 16;
 constexpr double kHeight = 0.6;  ///< the column's height
+/// The front meets the far wall at about 0.27 s (Martin and Moyce's Z(T) for a = 0.4); after that the
+/// "front" is the run-up's volume against the wall, not a front, so it is compared before this time.
+constexpr double kImpact = 0.25;
 
 const FlowMethod kMethods[] = {{"adaptive-rbf", true, pic::PicTransfer::rbf},
                                {"regular-apic", false, pic::PicTransfer::apic},
@@ -147,7 +151,7 @@ struct Distance {
 Distance distance(const Run& r, const Run& ref) {
   Distance d;
   for (std::size_t k = 0; k < r.at.size(); ++k) {
-    d.front = std::max(d.front, std::abs(r.at[k].front - ref.at[k].front) / kHeight);
+    if (kTimes[k] < kImpact) d.front = std::max(d.front, std::abs(r.at[k].front - ref.at[k].front) / kHeight);
     double sum = 0.0;
     for (int c = 0; c < kColumns; ++c) {
       const double diff = std::abs(r.at[k].height[c] - ref.at[k].height[c]) / kHeight;
@@ -183,7 +187,7 @@ CaseResult run(const CaseOptions& options) {
                           "column heights) against seconds to 0.3 s",
                           Dim),
               {"method", "finest", "steps", "particles", "distance", "front", "profile L1", "profile L-inf",
-               "seconds", "front at 0.3 s", "reference", "volume at 0.3 s"});
+               "seconds", "front at 0.15 s", "reference", "volume at 0.3 s"});
   Json series = Json::array();
   std::map<std::string, std::pair<std::vector<double>, std::vector<double>>> curves;  // errors, seconds
   for (const FlowMethod& m : methods) {
@@ -196,7 +200,7 @@ CaseResult run(const CaseOptions& options) {
                  m.name, level, e, d.front, d.profile, r.seconds);
       std::fflush(stdout);
       table.add_row({std::string(m.name), long(level), r.steps, r.particles, e, d.front, d.profile, d.worst,
-                     r.seconds, r.at.back().front, reference.at.back().front, r.at.back().volume});
+                     r.seconds, r.at[2].front, reference.at[2].front, r.at.back().volume});
       errors.push_back(e), seconds.push_back(r.seconds), hs.push_back(std::ldexp(1.0, -level));
       result.gate.push_back(
           {fmt::format("{} L{} error", m.name, level), GateFigure::Kind::error, std::max(e, 1e-6)});
