@@ -12,7 +12,6 @@
 // over every seed, but they change which particles split and merge (docs/findings/sph.md).
 
 #include <algorithm>
-#include <atomic>
 #include <cstdint>
 #include <functional>
 #include <limits>
