@@ -123,10 +123,9 @@ struct SphOptions {
   /// splits and merges). Why this default: docs/findings/sph.md.
   bool wall_footpoints = true;
   /// How the redistancing and feature-size marches run: the paper's priority queue on one thread, or
-  /// rounds on all threads (march.hpp). The rounds are 1.2-1.5x faster on two threads but settle on
-  /// other footpoints where the fixed point is not unique, which moves the resampling (a flat face
-  /// keeps 3443 particles instead of 2902), so the queue stays the default. Measured:
-  /// docs/findings/sph.md.
+  /// rounds on all threads (march.hpp). The queue stays the default because the rounds, though
+  /// faster, settle on other footpoints where the fixed point is not unique and so change the
+  /// resampling. Why: docs/findings/sph.md.
   MarchOrder march = MarchOrder::serial;
   double restitution = 0.0;  ///< normal velocity kept (reversed) at a wall
   std::uint64_t seed = 1;    ///< the split directions' random stream

@@ -8,8 +8,7 @@
 // sources and its own): the paper's priority queue (serial, `march_serial`, the default), and rounds
 // on all threads (`march_parallel`, see there), whose result does not depend on the thread count. A
 // cost is not a sum along a path, so the fixed point is not unique and the two can settle on
-// different sources: measured, the rounds never end above the queue and come nearer the least cost
-// over every seed, but they change which particles split and merge (docs/findings/sph.md).
+// different sources, which changes which particles split and merge (docs/findings/sph.md).
 
 #include <algorithm>
 #include <cstdint>
@@ -114,8 +113,8 @@ MarchStats march_parallel(const NeighbourLists& nbrs, std::vector<double>& value
   return stats;
 }
 
-/// `width`: the parallel order's band. Half the smallest support radius made the fewest updates in
-/// both marches without many more rounds (docs/findings/sph.md).
+/// `width`: the parallel order's band; callers pass half the smallest support radius (why:
+/// docs/findings/sph.md).
 template <class Cost>
 MarchStats march(MarchOrder order, const NeighbourLists& nbrs, std::vector<double>& value,
                  std::vector<int>& source, const Cost& cost, double width) {
