@@ -100,13 +100,16 @@ void echo(const scene::Scene<Dim>& s, const scene::RunSettings& settings, bool r
                o.adaptive && o.uniform_patches && o.rbf_gradient_affine ? " (its gradient as APIC's C)" : "",
                s.paper_preset ? " (the paper's preset)" : "");
   if (o.reseed && rbf_transfer) {
-    const bool holes = (o.reseeding.lo == 0 && o.reseeding.hi == 0) ||
-                       (o.reseeding.lo == 1 && o.reseeding.hi == std::numeric_limits<int>::max());
-    if (holes)
+    const int lo = Dim == 2 ? 3 : 5, hi = Dim == 2 ? 12 : 15;
+    const bool open_top = o.reseeding.hi == std::numeric_limits<int>::max();
+    if ((o.reseeding.lo == 0 && o.reseeding.hi == 0) ||
+        (o.reseeding.lo == lo && open_top && o.reseeding.keep))
       fmt::print(
-          "  reseeding   holes only (--paper: the paper's, which replaces every particle of a cell "
-          "outside [{}, {}])\n",
-          Dim == 2 ? 3 : 5, Dim == 2 ? 12 : 15);
+          "  reseeding   tops up cells holding fewer than {} particles (--paper: the paper's, which "
+          "replaces every particle of a cell outside [{}, {}])\n",
+          lo, lo, hi);
+    else if (o.reseeding.lo == 1 && open_top)
+      fmt::print("  reseeding   holes only\n");
     else
       fmt::print("  reseeding   {} the particles of a cell outside [{}, {}]{}\n",
                  o.reseeding.keep ? "thins or tops up" : "replaces",

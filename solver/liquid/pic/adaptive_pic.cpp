@@ -108,8 +108,11 @@ template <int Dim>
 AdaptivePic<Dim>::AdaptivePic(const PicOptions<Dim>& options)
     : options_(options), graph_(initial_graph(options)) {
   if (options_.transfer == PicTransfer::rbf && options_.reseeding.lo == 0 && options_.reseeding.hi == 0) {
-    options_.reseeding.lo = 1;  // holes only: a cell is refilled when the step left it empty
+    // Top up sparse cells, never thin crowded ones: a cell below the paper's lower bound keeps its own
+    // particles and gets new ones up to 2^Dim (docs/findings/dam-break-convergence.md).
+    options_.reseeding.lo = Dim == 2 ? 3 : 5;
     options_.reseeding.hi = std::numeric_limits<int>::max();
+    options_.reseeding.keep = true;
   }
   if (options_.transfer != PicTransfer::rbf)
     lattice_ = std::make_unique<transfer::RegularLattice<Dim>>(graph_);
@@ -343,64 +346,75 @@ void AdaptivePic<Dim>::fill(std::span<const tree::CellId> cells, PicStepReport& 
 
 template <int Dim>
 void AdaptivePic<Dim>::adapt_grid(PicStepReport& r) {
-  tree::MarkList marks;
-  // Active sources are kept fine like the surface: the liquid they create starts in the band. A
-  // cell counts when the source may overlap it (level set within half its diagonal of the centre),
-  // so that a source smaller than the coarse air cells around it is found and refined down to.
-  std::vector<tree::CellId> centres = cls_.surface;
-  for (const PicSource<Dim>& s : options_.sources)
-    if (s.active(time_))
+  // The band is refined all the way to fine_level before the step goes on (adapt() splits a cell by
+  // one level a round), so that the surface never enters a cell coarser than fine_level: a coarse
+  // surface cell that splits later leaves its empty children as air, and the liquid loses their
+  // volume (docs/findings/dam-break-convergence.md). Coarsening stays one level a step.
+  // One round: mark the band (merges only when `merge`), adapt, fill; true when a cell split.
+  const auto adapt_round = [&](bool merge) {
+    tree::MarkList marks;
+    // Active sources are kept fine like the surface: the liquid they create starts in the band. A
+    // cell counts when the source may overlap it (level set within half its diagonal of the centre),
+    // so that a source smaller than the coarse air cells around it is found and refined down to.
+    std::vector<tree::CellId> centres = cls_.surface;
+    for (const PicSource<Dim>& s : options_.sources)
+      if (s.active(time_))
+        graph_.for_each_cell([&](tree::CellId c) {
+          if (s.region(graph_.centre(c)) < 0.5 * graph_.cell_size(c).norm() && !cls_.is_solid(c))
+            centres.push_back(c);
+        });
+    if (options_.refine)
       graph_.for_each_cell([&](tree::CellId c) {
-        if (s.region(graph_.centre(c)) < 0.5 * graph_.cell_size(c).norm() && !cls_.is_solid(c))
-          centres.push_back(c);
+        if (options_.refine(graph_.centre(c)) < 0.5 * graph_.cell_size(c).norm()) centres.push_back(c);
       });
-  if (options_.refine)
-    graph_.for_each_cell([&](tree::CellId c) {
-      if (options_.refine(graph_.centre(c)) < 0.5 * graph_.cell_size(c).norm()) centres.push_back(c);
-    });
-  // So is the liquid's contact with a solid, two hops wider than the band: no RBF-FD row then
-  // reaches a solid cell, where fold_solid_rows() is only first order (a still pool around a
-  // submerged box then stays still; docs/findings/pic-solver.md).
-  if (!solid_.empty()) {
-    std::vector<tree::CellId> ring;
-    for (tree::CellId c : cls_.fluid)
-      for (tree::FaceId f : graph_.faces(c))
-        if (cls_.solid_face(graph_.face(f))) {
-          graph_.k_ring(c, 2, ring);
-          centres.insert(centres.end(), ring.begin(), ring.end());
-          break;
-        }
-  }
-  pic::mark_band<Dim>(graph_, centres, options_.band, options_.coarse_level, options_.finest_level, marks);
-  if (marks.empty()) return;
-  // Interior fluid cells about to split: their empty children are liquid and get particles.
-  std::vector<std::uint8_t> interior(graph_.cell_capacity(), 0);
-  for (tree::CellId c : cls_.fluid) interior[c] = 1;
-  for (tree::CellId c : cls_.surface) interior[c] = 0;
-  const tree::AdaptReport report = graph_.adapt(marks);
-  r.n_split += report.n_split;
-  r.n_merged += report.n_merged;
-  if (report.empty()) return;
-  tree::remap::face_field(graph_, report, u_);
-  std::vector<double> known(known_.begin(), known_.end());
-  tree::remap::face_field(graph_, report, known);
-  known_.resize(known.size());
-  for (std::size_t f = 0; f < known.size(); ++f) known_[f] = known[f] > 0.5;
-  tree::remap::cell_field(graph_, report, p_);
-  if (!solid_.empty()) {
-    solid_.resize(graph_.cell_capacity(), 0);
-    for (tree::CellId c : report.new_cells) solid_[c] = options_.solid(graph_.centre(c)) < 0.0;
-  }
-  particles::rebin<Dim>(graph_, particles_.x, bins_, &report);
-  std::vector<tree::CellId> children;
-  const tree::Origins& o = report.cell_origins;
-  for (std::size_t n = 0; n < report.new_cells.size(); ++n) {
-    const tree::CellId c = report.new_cells[n];
-    if (o.begin[n + 1] - o.begin[n] == 1 && interior[o.source[o.begin[n]]] && bins_.count(c) == 0)
-      children.push_back(c);
-  }
-  fill(children, r);
-  classify();
+    // So is the liquid's contact with a solid, two hops wider than the band: no RBF-FD row then
+    // reaches a solid cell, where fold_solid_rows() is only first order (a still pool around a
+    // submerged box then stays still; docs/findings/pic-solver.md).
+    if (!solid_.empty()) {
+      std::vector<tree::CellId> ring;
+      for (tree::CellId c : cls_.fluid)
+        for (tree::FaceId f : graph_.faces(c))
+          if (cls_.solid_face(graph_.face(f))) {
+            graph_.k_ring(c, 2, ring);
+            centres.insert(centres.end(), ring.begin(), ring.end());
+            break;
+          }
+    }
+    pic::mark_band<Dim>(graph_, centres, options_.band, options_.coarse_level, options_.finest_level, marks);
+    if (!merge) marks.merge.clear();
+    if (marks.split.empty() && marks.merge.empty()) return false;
+    // Interior fluid cells about to split: their empty children are liquid and get particles.
+    std::vector<std::uint8_t> interior(graph_.cell_capacity(), 0);
+    for (tree::CellId c : cls_.fluid) interior[c] = 1;
+    for (tree::CellId c : cls_.surface) interior[c] = 0;
+    const tree::AdaptReport report = graph_.adapt(marks);
+    r.n_split += report.n_split;
+    r.n_merged += report.n_merged;
+    if (report.empty()) return false;
+    tree::remap::face_field(graph_, report, u_);
+    std::vector<double> known(known_.begin(), known_.end());
+    tree::remap::face_field(graph_, report, known);
+    known_.resize(known.size());
+    for (std::size_t f = 0; f < known.size(); ++f) known_[f] = known[f] > 0.5;
+    tree::remap::cell_field(graph_, report, p_);
+    if (!solid_.empty()) {
+      solid_.resize(graph_.cell_capacity(), 0);
+      for (tree::CellId c : report.new_cells) solid_[c] = options_.solid(graph_.centre(c)) < 0.0;
+    }
+    particles::rebin<Dim>(graph_, particles_.x, bins_, &report);
+    std::vector<tree::CellId> children;
+    const tree::Origins& o = report.cell_origins;
+    for (std::size_t n = 0; n < report.new_cells.size(); ++n) {
+      const tree::CellId c = report.new_cells[n];
+      if (o.begin[n + 1] - o.begin[n] == 1 && interior[o.source[o.begin[n]]] && bins_.count(c) == 0)
+        children.push_back(c);
+    }
+    fill(children, r);
+    classify();
+    return report.n_split > 0;
+  };
+  for (int round = 0; round <= options_.finest_level - options_.coarse_level; ++round)
+    if (!adapt_round(round == 0)) break;
 }
 
 template <int Dim>

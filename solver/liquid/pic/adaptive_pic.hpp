@@ -124,8 +124,8 @@ struct PicOptions {
   double advect_cfl = 1.0;  ///< advection substeps keep |v| dt_sub <= advect_cfl * finest h
   int extrapolation_layers = 4;
   bool reseed = true;
-  /// Ranges left at 0 take the method's default: holes only (lo 1, no hi) with the RBF transfer,
-  /// [3, 12] (2D) and [5, 15] (3D) with PIC, FLIP and APIC.
+  /// Ranges left at 0 take the method's default: with the RBF transfer, sparse cells topped up
+  /// (lo 3 in 2D, 5 in 3D, no hi, keep); [3, 12] (2D) and [5, 15] (3D) with PIC, FLIP and APIC.
   particles::ReseedOptions reseeding;
   mac::PoissonOptions poisson = paper_poisson();
   linalg::SolveOptions solver{linalg::SolverKind::bicgstab_ilut, 1e-8};
@@ -167,7 +167,8 @@ struct PicOptions {
   /// The paper's exact transfer and reseeding (scene key `[solver] preset = "paper"`, `liquid run
   /// --paper`): PHS r^5 + degree 2 transfers, and reseeding that replaces the particles of every
   /// cell holding fewer than 3 (2D) / 5 (3D) or more than 12 / 15. The default differs (r^3 + degree
-  /// 1, holes-only reseeding for the RBF transfer): docs/findings/transfer-stability.md.
+  /// 1; for the RBF transfer, reseeding that tops up sparse cells and never thins crowded ones):
+  /// docs/findings/transfer-stability.md, docs/findings/dam-break-convergence.md.
   void apply_paper_preset() {
     rbf.exponent = 5;
     rbf.degree = 2;

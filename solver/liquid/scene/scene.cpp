@@ -624,10 +624,13 @@ void read_pic_solver(const TableReader& r, Scene<Dim>& s) {
   s.paper_preset = r.choice("preset", {"default", "paper"}, std::string("default")) == "paper";
   if (s.paper_preset) o.apply_paper_preset();
   if (r.has("reseed_mode")) {
-    const std::string reseed_mode = r.choice("reseed_mode", {"replace", "keep", "holes"});
-    o.reseeding.keep = reseed_mode == "keep";
+    const std::string reseed_mode = r.choice("reseed_mode", {"replace", "keep", "holes", "top-up"});
+    o.reseeding.keep = reseed_mode == "keep" || reseed_mode == "top-up";
     if (reseed_mode == "holes") {  // only cells the step left empty inside the liquid
       o.reseeding.lo = 1;
+      o.reseeding.hi = std::numeric_limits<int>::max();
+    } else if (reseed_mode == "top-up") {  // sparse cells get new particles; crowded ones are left
+      o.reseeding.lo = Dim == 2 ? 3 : 5;
       o.reseeding.hi = std::numeric_limits<int>::max();
     } else {  // the paper's band: cells with too few or too many particles
       o.reseeding.lo = Dim == 2 ? 3 : 5;

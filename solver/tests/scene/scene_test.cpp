@@ -79,7 +79,7 @@ TEST(Scene, ValuesAndOverridesReachTheSolverOptions) {
   EXPECT_TRUE(s.pic.rbf.share_factors);  // the defaults
   EXPECT_EQ(s.pic.rbf.condition_estimate, rbf::ConditionEstimate::probes);
   EXPECT_EQ(s.pic.poisson.nullspace, mac::Nullspace::zero_mean);
-  EXPECT_EQ(s.pic.rbf.exponent, 3);  // the default transfer; reseeding left to the method (holes only)
+  EXPECT_EQ(s.pic.rbf.exponent, 3);  // the default transfer; reseeding left to the method (top-up)
   EXPECT_EQ(s.pic.rbf.degree, 1);
   EXPECT_EQ(s.pic.reseeding.lo, 0);
   EXPECT_FALSE(s.paper_preset);
@@ -136,6 +136,16 @@ TEST(Scene, ValuesAndOverridesReachTheSolverOptions) {
     EXPECT_EQ(own.pic.reseeding.lo, 1);  // holes only: no cell with a particle is reseeded
     EXPECT_EQ(own.pic.reseeding.hi, std::numeric_limits<int>::max());
     EXPECT_FALSE(own.pic.reseeding.keep);
+    // top-up: sparse cells keep their particles and get new ones; crowded cells are never thinned.
+    const auto mode = toml.find("reseed_mode = \"holes\"");
+    ASSERT_NE(mode, std::string::npos);
+    std::string top = toml;
+    top.replace(mode, 21, "reseed_mode = \"top-up\"");
+    std::ofstream(path) << top;
+    const scene::Scene<2> topped = scene::load_scene<2>(path);
+    EXPECT_EQ(topped.pic.reseeding.lo, 3);
+    EXPECT_EQ(topped.pic.reseeding.hi, std::numeric_limits<int>::max());
+    EXPECT_TRUE(topped.pic.reseeding.keep);
   }
   const scene::Scene<3> obstacles = scene::load_scene<3>(scene::find_scene("dam-break-obstacles-3d"));
   ASSERT_TRUE(static_cast<bool>(obstacles.pic.solid));
@@ -213,8 +223,9 @@ TEST(Scene, TheMemoryEstimateHoldsTheSeededParticlesAndGrowsWithTheLevel) {
       o.finest = 7;
       scene::Scene<2> finer = scene::load_scene<2>(scene::find_scene(name));
       scene::apply_overrides<2>(o, finer);
-      if (!adaptive)
+      if (!adaptive) {
         EXPECT_NEAR(scene::estimate_pic_size<2>(finer).particles / size.particles, 4.0, 0.2) << name;
+      }
     }
 }
 

@@ -40,7 +40,7 @@ struct Method {
   pic::PicTransfer transfer;
   pic::PicProjection projection = pic::PicProjection::volume;
   /// The paper's preset (PHS r^5 + degree 2 transfers, the paper's reseeding) instead of the
-  /// defaults (PHS r^3 + degree 1, holes-only reseeding).
+  /// defaults (PHS r^3 + degree 1, top-up reseeding).
   bool paper = false;
 };
 // regular-pic-mass: PIC with the projection orthogonal in the faces' transferred masses

@@ -4,7 +4,7 @@
 // the exact solution is u = 0 for all time. The adaptive RBF-PIC solver runs it with the band at the
 // finest level and the interior two levels coarser, with the default transfer and reseeding
 // (adaptive-rbf: APIC in the tree's uniform patches, PHS r^3 + degree 1 across level changes with its
-// gradient as the particles' affine part, holes-only reseeding), with the RBF everywhere
+// gradient as the particles' affine part, sparse cells topped up), with the RBF everywhere
 // (adaptive-rbf-everywhere, full tier: the default before the patches), with tent particle -> face
 // at level changes (adaptive-rbf-tent, full tier) and with the paper's preset
 // (adaptive-rbf-paper); regular APIC on the uniform tree at the finest level is the baseline. dt = min(0.02,

@@ -6,7 +6,7 @@
 // T = pi (the box side over the peak speed 1); the runs go to 4 T with dt = finest h / (peak
 // particle speed) (CFL 1). Methods: adaptive-rbf (RBF-PIC on a tree at the finest level in the
 // refined region [pi/4, 3pi/4]^2, where the vorticity peaks, one level coarser elsewhere; the
-// default PHS r^3 + degree 1 transfers and holes-only reseeding), adaptive-rbf-paper (the same
+// default PHS r^3 + degree 1 transfers and top-up reseeding), adaptive-rbf-paper (the same
 // with the paper's preset: PHS r^5 + degree 2 and its reseeding), regular-rbf (the default
 // transfers on the uniform tree), and the regular baselines regular-pic, regular-flip (blend 0.95),
 // regular-apic, all at finest
@@ -61,7 +61,7 @@ constexpr int kSamples = 64;
 using Method = FlowMethod;
 
 /// The adaptive run with the paper's preset (PHS r^5 + degree 2 transfers, the paper's reseeding),
-/// measured beside the default one (PHS r^3 + degree 1, holes-only reseeding).
+/// measured beside the default one (PHS r^3 + degree 1, top-up reseeding).
 constexpr const char* kPaper = "adaptive-rbf-paper";
 
 /// The flow studies' methods.
