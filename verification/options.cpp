@@ -147,6 +147,11 @@ void add_study_flags(CLI::App& app, StudyFlags& f) {
   app.add_option("--aspect", f.aspect, "sph-flat-surface: the box's width over its height (0.25 to 4)")
       ->check(finite_number)
       ->check(CLI::Range(0.25, 4.0));
+  app.add_option(
+         "--merge-wait", f.merge_wait,
+         "sph-adaptivity-gain: a split's children are not merged for this many resampling passes (0 to "
+         "1000; 0, the default, is the paper's)")
+      ->check(CLI::Range(0, 1000));
   app.add_option("--max-cells", f.max_cells, kMaxCellsHelp)->check(CLI::Range(1L, 1'000'000'000'000L));
   app.add_flag("--full", f.full, "use the full suite's extent");
 }
@@ -157,7 +162,8 @@ CaseOptions case_options(const StudyFlags& f, const CaseInfo& info) {
                    Option::rbf_exponent, Option::rbf_degree, Option::gradient_degree, Option::stencil_growth,
                    Option::ring_cap,     Option::rows,       Option::nullspace,       Option::tolerance,
                    Option::algebraic,    Option::perturb,    Option::trees,           Option::methods,
-                   Option::seed,         Option::particles,  Option::radius,          Option::aspect})
+                   Option::seed,         Option::particles,  Option::radius,          Option::aspect,
+                   Option::merge_wait})
     if (f.given(o) && !info.accepts_option(o)) refused.push_back(flag_of(o));
   if (!refused.empty()) {
     std::vector<std::string> accepted;
@@ -210,6 +216,7 @@ CaseOptions case_options(const StudyFlags& f, const CaseInfo& info) {
   if (f.given(Option::particles)) o.particles = f.particles;
   if (f.given(Option::radius)) o.radius = f.radius;
   if (f.given(Option::aspect)) o.aspect = f.aspect;
+  if (f.given(Option::merge_wait)) o.merge_wait = f.merge_wait;
   o.max_cells = f.max_cells;
   o.full = f.full;
   return o;
@@ -240,6 +247,7 @@ std::string echo(const std::string& case_name, const StudyFlags& f) {
   s += show(Option::particles, std::to_string(f.particles));
   s += show(Option::radius, fmt::format("{:g}", f.radius));
   s += show(Option::aspect, fmt::format("{:g}", f.aspect));
+  s += show(Option::merge_wait, std::to_string(f.merge_wait));
   s += fmt::format(" --max-cells {} --tier {}", f.max_cells, f.full ? "full" : "quick");
   return s;
 }

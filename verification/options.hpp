@@ -32,6 +32,7 @@ struct StudyFlags {
   std::string seed;
   long particles = 0;
   double radius = 0.0, aspect = 1.0;
+  int merge_wait = 0;
   long max_cells = 0;
   bool full = false;
 

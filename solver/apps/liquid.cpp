@@ -117,6 +117,9 @@ void echo(const scene::Scene<Dim>& s, const scene::RunSettings& settings, bool r
                  o.reseeding.hi > 0 ? o.reseeding.hi : (Dim == 2 ? 12 : 15),
                  s.paper_preset ? " (the paper's preset)" : "");
   }
+  if (o.reseed && o.adaptive && o.refill_emptied)
+    fmt::print(
+        "  refill      cells inside the liquid that a step leaves empty (refill_emptied = false: not)\n");
   fmt::print("  surface     {}\n",
              o.surface == pic::PicSurface::air_cells
                  ? std::string("p = 0 at the air cells' centres")
@@ -157,8 +160,12 @@ void echo_sph(const scene::Scene<Dim>& s, const scene::RunSettings& settings, bo
              fmt::join(o.container.lo.data(), o.container.lo.data() + Dim, ", "),
              fmt::join(o.container.hi.data(), o.container.hi.data() + Dim, ", "));
   fmt::print("  particles   spacing {:.4g} m (support radius {:.4g}), {}\n", o.spacing, o.h_ratio * o.spacing,
-             o.adaptive ? fmt::format("adaptive, levels 0-{} (alpha {}, beta {}), resampled every {} steps",
-                                      o.max_level, o.resampling.alpha, o.resampling.beta, o.resample_every)
+             o.adaptive ? fmt::format("adaptive, levels 0-{} (alpha {}, beta {}), resampled every {} steps{}",
+                                      o.max_level, o.resampling.alpha, o.resampling.beta, o.resample_every,
+                                      o.merge_min_passes > 0
+                                          ? fmt::format(", a split's children kept {} passes before a merge",
+                                                        o.merge_min_passes)
+                                          : "")
                         : std::string("single resolution (level 0 only)"));
   fmt::print("  fluid       rho_0 {} kg/m^{}, sound speed {:.3g} m/s{}, viscosity {} Pa s\n",
              o.fluid.rest_density, Dim, scene::sph_sound_speed<Dim>(s),
@@ -335,6 +342,10 @@ void print_sph_summary(const scene::SphRunSummary& s, const std::string& name, i
   fmt::print("  particles per level (mean): {}; fewest {}, most {}\n", levels, s.min_particles,
              s.max_particles);
   fmt::print("  split {}, merged {}, added by sources {}\n", s.split, s.merged, s.emitted);
+  if (s.split + s.merged > 0)
+    fmt::print(
+        "  churn       {} merges of a split's child, {} splits of a merged particle, within {} passes\n",
+        s.churn_merged, s.churn_split, sph::kChurnPasses);
   fmt::print(
       "  largest compression {:.3g}%; largest density error {:.3g}% (with spray and fragments, which expand "
       "at zero pressure); at most {} particles alone at once (their densities set to rest)\n",

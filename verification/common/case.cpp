@@ -51,6 +51,8 @@ const char* flag_of(Option option) {
       return "--radius";
     case Option::aspect:
       return "--aspect";
+    case Option::merge_wait:
+      return "--merge-wait";
   }
   return "?";
 }

@@ -39,7 +39,8 @@ enum class Option {
   seed,
   particles,
   radius,
-  aspect
+  aspect,
+  merge_wait
 };
 using OptionSet = std::vector<Option>;
 /// The command-line flag of an option ("--max-jump").
@@ -102,6 +103,7 @@ struct CaseOptions {
   std::optional<long> particles;              ///< --particles N: the size of a sampled problem
   std::optional<double> radius;               ///< --radius R: a sampled sphere's radius (domain units)
   std::optional<double> aspect;               ///< --aspect A: a sampled box's width over its height
+  std::optional<int> merge_wait;              ///< --merge-wait N: SPH, passes before a split's children merge
   long max_cells = 0;                         ///< budget: refuse rows above this many cells (0: no limit)
   bool full = false;                          ///< the full suite's extent rather than the quick one
 };

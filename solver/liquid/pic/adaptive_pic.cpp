@@ -855,11 +855,21 @@ void AdaptivePic<Dim>::advect(double dt, PicStepReport& r) {
 }
 
 template <int Dim>
-void AdaptivePic<Dim>::reseed(PicStepReport& r) {
+void AdaptivePic<Dim>::reseed(PicStepReport& r, std::span<const std::uint8_t> was_interior) {
   classify();
   std::vector<tree::CellId> interior;
   std::set_difference(cls_.fluid.begin(), cls_.fluid.end(), cls_.surface.begin(), cls_.surface.end(),
                       std::back_inserter(interior));
+  // Cells inside the liquid at the step's start that it left empty: refilled as the holes are.
+  if (!was_interior.empty()) {
+    const std::size_t before = interior.size();
+    graph_.for_each_cell([&](tree::CellId c) {
+      if (static_cast<std::size_t>(c) < was_interior.size() && was_interior[c] &&
+          cls_.type[c] == CellType::air)
+        interior.push_back(c);
+    });
+    if (interior.size() > before) std::sort(interior.begin(), interior.end());
+  }
   // Holes opened by this step's advection are refilled with the rest.
   particles::ReseedOptions o = options_.reseeding;
   o.fill_empty = true;
@@ -891,6 +901,12 @@ PicStepReport AdaptivePic<Dim>::advance(double dt) {
     if (!options_.sources.empty()) phase("sources", [&] { apply_sources(r); });
     phase("classify", [&] { classify(); });
     if (options_.adaptive) phase("grid", [&] { adapt_grid(r); });
+    std::vector<std::uint8_t> was_interior;
+    if (options_.adaptive && options_.reseed && options_.refill_emptied) {
+      was_interior.assign(graph_.cell_capacity(), 0);
+      for (tree::CellId c : cls_.fluid) was_interior[c] = 1;
+      for (tree::CellId c : cls_.surface) was_interior[c] = 0;
+    }
     phase("p2g", [&] { to_faces(r); });
     phase("forces", [&] { forces(dt); });
     if (options_.projection == PicProjection::split) phase("gravity", [&] { project_gravity(dt, r); });
@@ -918,7 +934,7 @@ PicStepReport AdaptivePic<Dim>::advance(double dt) {
     phase("extrapolate", [&] { extrapolate(); });
     phase("g2p", [&] { to_particles(r); });
     phase("advect", [&] { advect(dt, r); });
-    if (options_.reseed) phase("reseed", [&] { reseed(r); });
+    if (options_.reseed) phase("reseed", [&] { reseed(r, was_interior); });
   }
   ++step_;
   time_ += dt;

@@ -124,6 +124,11 @@ struct PicOptions {
   double advect_cfl = 1.0;  ///< advection substeps keep |v| dt_sub <= advect_cfl * finest h
   int extrapolation_layers = 4;
   bool reseed = true;
+  /// Adaptive runs: a cell that was fluid and not surface when the step began and that the advection
+  /// left empty is refilled like a hole (the coarse interior's sparse particles cannot refill finer
+  /// cells downstream; scene key `[solver] refill_emptied`; off in the paper's preset).
+  /// Why: docs/findings/dam-break-convergence.md.
+  bool refill_emptied = true;
   /// Ranges left at 0 take the method's default: with the RBF transfer, sparse cells topped up
   /// (lo 3 in 2D, 5 in 3D, no hi, keep); [3, 12] (2D) and [5, 15] (3D) with PIC, FLIP and APIC.
   particles::ReseedOptions reseeding;
@@ -176,11 +181,12 @@ struct PicOptions {
     reseeding.hi = Dim == 2 ? 12 : 15;
     reseeding.keep = false;
     uniform_patches = false;
+    refill_emptied = false;
   }
   /// True when the transfer and reseeding are the paper's preset (what apply_paper_preset() sets).
   bool paper_preset() const {
     return rbf.exponent == 5 && rbf.degree == 2 && reseeding.lo == (Dim == 2 ? 3 : 5) &&
-           reseeding.hi == (Dim == 2 ? 12 : 15) && !reseeding.keep && !uniform_patches;
+           reseeding.hi == (Dim == 2 ? 12 : 15) && !reseeding.keep && !uniform_patches && !refill_emptied;
   }
   static Vec<Dim> default_gravity() {
     Vec<Dim> g = Vec<Dim>::Zero();
@@ -307,7 +313,11 @@ class AdaptivePic {
   double grid_energy() const;  ///< see PicStepReport::grid_energy_before
   void to_particles(PicStepReport& r);
   void advect(double dt, PicStepReport& r);
-  void reseed(PicStepReport& r);
+  /// was_interior (adaptive runs; by cell id, or empty): the cells that were fluid and not surface
+  /// when the step began. Such a cell left empty by the advection is refilled: with the step's CFL
+  /// the air cannot have reached it, so it was emptied by the sparse particles of coarser cells
+  /// upstream, not by the surface.
+  void reseed(PicStepReport& r, std::span<const std::uint8_t> was_interior);
   particles::VelocitySource<Dim> grid_velocity() const;
   void check_faces(const char* phase) const;
   void check_particles(const char* phase) const;

@@ -302,6 +302,7 @@ std::string format_box(const Box<Dim>& b) {
 const std::vector<std::string> sph_keys = {"spacing",
                                            "levels",
                                            "resample_every",
+                                           "merge_min_passes",
                                            "alpha",
                                            "beta",
                                            "kernel",
@@ -360,6 +361,7 @@ void read_sph(const TableReader& r, Scene<Dim>& s) {
   }
   o.max_level = static_cast<int>(r.integer_in("levels", 0, 12, o.max_level));
   o.resample_every = static_cast<int>(r.integer_in("resample_every", 1, 100000, o.resample_every));
+  o.merge_min_passes = static_cast<int>(r.integer_in("merge_min_passes", 0, 1000, o.merge_min_passes));
   o.resampling.alpha = r.positive("alpha", o.resampling.alpha);
   o.resampling.beta = r.positive("beta", o.resampling.beta);
   LIQUID_VERIFY(o.resampling.alpha < o.resampling.beta, "{}: alpha {} must be below beta {}", r.where("beta"),
@@ -578,6 +580,7 @@ const std::vector<std::string> solver_keys = {"method",
                                               "flip",
                                               "integrator",
                                               "reseed",
+                                              "refill_emptied",
                                               "reseed_mode",
                                               "gravity",
                                               "extrapolation",
@@ -623,6 +626,7 @@ void read_pic_solver(const TableReader& r, Scene<Dim>& s) {
   // The paper's preset first: the keys below override what it sets.
   s.paper_preset = r.choice("preset", {"default", "paper"}, std::string("default")) == "paper";
   if (s.paper_preset) o.apply_paper_preset();
+  o.refill_emptied = r.boolean("refill_emptied", o.refill_emptied);
   if (r.has("reseed_mode")) {
     const std::string reseed_mode = r.choice("reseed_mode", {"replace", "keep", "holes", "top-up"});
     o.reseeding.keep = reseed_mode == "keep" || reseed_mode == "top-up";

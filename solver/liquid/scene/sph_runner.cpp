@@ -98,6 +98,8 @@ const sph::SphStepReport& SphSceneRunner<Dim>::step() {
   ++steps_;
   split_ += last_.resampling.split;
   merged_ += last_.resampling.merged;
+  churn_merged_ += last_.resampling.churn_merged;
+  churn_split_ += last_.resampling.churn_split;
   emitted_ += last_.emitted;
   sum_particles_ += last_.particles;
   min_particles_ = std::min(min_particles_, last_.particles);
@@ -205,6 +207,10 @@ std::string SphSceneRunner<Dim>::checkpoint() {
   w.put("sph/particles/pressure", std::span<const double>(q.pressure));
   w.put("sph/particles/distance", std::span<const double>(q.distance));
   w.put("sph/particles/elfs", std::span<const double>(q.elfs));
+  std::vector<std::int32_t> birth(q.birth.size());
+  for (std::size_t i = 0; i < birth.size(); ++i) birth[i] = static_cast<std::int32_t>(q.birth[i]);
+  w.put("sph/particles/birth", std::span<const std::int32_t>(birth));
+  w.put("sph/particles/born", std::span<const std::int64_t>(q.born));
   w.put_scalar("sph/time", st.time);
   w.put_scalar("sph/step", static_cast<std::int64_t>(st.steps));
   w.put_string("sph/rng", st.rng);
@@ -213,6 +219,8 @@ std::string SphSceneRunner<Dim>::checkpoint() {
   const std::vector<std::int64_t> counts = {steps_,         split_,         merged_, emitted_,
                                             min_particles_, max_particles_, rested_};
   w.put("run/counts", std::span<const std::int64_t>(counts));
+  const std::vector<std::int64_t> churn = {churn_merged_, churn_split_};
+  w.put("run/churn", std::span<const std::int64_t>(churn));
   const std::vector<double> sums = {sum_particles_, sum_single_, max_density_error_, max_compression_};
   w.put("run/sums", std::span<const double>(sums));
   w.put("run/per_level", std::span<const double>(sum_per_level_));
@@ -251,6 +259,16 @@ SphSceneRunner<Dim> SphSceneRunner<Dim>::resume(const std::string& checkpoint, R
   q.pressure = r.doubles("sph/particles/pressure");
   q.distance = r.doubles("sph/particles/distance");
   q.elfs = r.doubles("sph/particles/elfs");
+  if (r.has("sph/particles/birth")) {  // absent before churn was counted: every particle then as seeded
+    for (std::int32_t b : r.int32s("sph/particles/birth")) {
+      LIQUID_VERIFY(b >= 0 && b <= 2, "{}: a particle birth of {}", checkpoint, b);
+      q.birth.push_back(static_cast<typename sph::SphParticles<Dim>::Birth>(b));
+    }
+    q.born = r.int64s("sph/particles/born");
+  } else {
+    q.birth.assign(q.x.size(), sph::SphParticles<Dim>::Birth::seeded);
+    q.born.assign(q.x.size(), -1);
+  }
   st.time = r.scalar_double("sph/time");
   st.steps = r.scalar_int("sph/step");
   st.rng = r.string("sph/rng");
@@ -270,6 +288,11 @@ SphSceneRunner<Dim> SphSceneRunner<Dim>::resume(const std::string& checkpoint, R
                 "{}; a checkpoint from an older version of liquid?)",
                 checkpoint, counts.size(), sums.size(), per_level.size(), run.sum_per_level_.size());
   run.steps_ = counts[0], run.split_ = counts[1], run.merged_ = counts[2], run.emitted_ = counts[3];
+  if (r.has("run/churn")) {  // absent before churn was counted
+    const std::vector<std::int64_t> churn = r.int64s("run/churn");
+    LIQUID_VERIFY(churn.size() == 2, "{}: run/churn holds {} counts, not 2", checkpoint, churn.size());
+    run.churn_merged_ = churn[0], run.churn_split_ = churn[1];
+  }
   run.min_particles_ = static_cast<int>(counts[4]), run.max_particles_ = static_cast<int>(counts[5]);
   run.sum_particles_ = sums[0], run.sum_single_ = sums[1], run.max_density_error_ = sums[2];
   run.rested_ = counts[6], run.max_compression_ = sums[3];
@@ -293,6 +316,7 @@ SphRunSummary SphSceneRunner<Dim>::summary() const {
   s.single_particles = sum_single_ / n;
   for (double c : sum_per_level_) s.per_level.push_back(c / n);
   s.split = split_, s.merged = merged_, s.emitted = emitted_;
+  s.churn_merged = churn_merged_, s.churn_split = churn_split_;
   s.max_density_error = max_density_error_;
   s.max_compression = max_compression_;
   s.rested = rested_;

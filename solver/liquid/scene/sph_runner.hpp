@@ -42,6 +42,8 @@ struct SphRunSummary {
   double single_particles = 0.0;
   std::vector<double> per_level;  ///< average particles of each level per step
   long split = 0, merged = 0, emitted = 0;
+  /// Churn (sph::kChurnPasses): merges of a split's child and splits of a merged particle, soon after
+  long churn_merged = 0, churn_split = 0;
   double max_density_error = 0.0;  ///< the largest |rho / rho_0 - 1| of any step
   double max_compression = 0.0;    ///< the largest rho / rho_0 - 1 of any step
   /// The most particles alone in one step, whose densities were set to rho_0
@@ -90,7 +92,7 @@ class SphSceneRunner {
   int frame_ = 0;
   double next_frame_ = 0.0;
   // Sums for the summary (restored from checkpoints).
-  long steps_ = 0, split_ = 0, merged_ = 0, emitted_ = 0;
+  long steps_ = 0, split_ = 0, merged_ = 0, emitted_ = 0, churn_merged_ = 0, churn_split_ = 0;
   int min_particles_ = 0, max_particles_ = 0;
   double sum_particles_ = 0.0, sum_single_ = 0.0, max_density_error_ = 0.0, wall_ = 0.0;
   double max_compression_ = 0.0;

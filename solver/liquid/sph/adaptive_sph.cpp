@@ -78,6 +78,8 @@ void SphOptions<Dim>::check() const {
                 fluid.rest_density, fluid.stiffness, fluid.viscosity);
   LIQUID_VERIFY(max_level >= 0 && max_level <= 12, "sph: max_level must be within 0..12, not {}", max_level);
   LIQUID_VERIFY(resample_every >= 1, "sph: resample_every must be at least 1, not {}", resample_every);
+  LIQUID_VERIFY(merge_min_passes >= 0 && merge_min_passes <= 1000,
+                "sph: merge_min_passes must be within 0..1000, not {}", merge_min_passes);
   LIQUID_VERIFY(resampling.alpha > 0.0 && resampling.beta > resampling.alpha,
                 "sph: alpha = {} and beta = {} must satisfy 0 < alpha < beta", resampling.alpha,
                 resampling.beta);
@@ -417,7 +419,11 @@ void AdaptiveSph<Dim>::redistance_and_resample(SphStepReport& report) {
     // A child inside the collisions' margin would be moved there before the next step: closer to its
     // neighbours than the split allows, and away from the position its kept list was built at.
     const SolidTest<Dim> solid = [this](const Vec<Dim>& x) { return in_collision_margin(x); };
-    report.resampling = resample<Dim>(p_, exact, sizes_, options_.resampling, solid, rng_, &origin);
+    ResampleOptions o = options_.resampling;
+    o.now = steps_;
+    o.merge_min_age = static_cast<std::int64_t>(options_.merge_min_passes) * options_.resample_every;
+    o.churn_window = static_cast<std::int64_t>(kChurnPasses) * options_.resample_every;
+    report.resampling = resample<Dim>(p_, exact, sizes_, o, solid, rng_, &origin);
   }
   if (report.resampling.split + report.resampling.merged == 0) return;
   if (patch) {
@@ -900,6 +906,9 @@ void AdaptiveSph<Dim>::relax(double duration, const Box<Dim>* hold) {
   }
   for (auto& v : p_.v) v.setZero();
   time_ = 0.0, steps_ = 0;
+  // The clock restarts: nothing is young at t = 0 (the resampling at rest made what it made).
+  std::fill(p_.born.begin(), p_.born.end(), -1);
+  std::fill(p_.birth.begin(), p_.birth.end(), SphParticles<Dim>::Birth::seeded);
   timer_.clear();
 }
 
@@ -937,7 +946,7 @@ void AdaptiveSph<Dim>::restore(SphState<Dim> st) {
   LIQUID_VERIFY(q.v.size() == n && q.a.size() == n && q.level.size() == n && q.mass.size() == n &&
                     q.radius.size() == n && q.density.size() == n && q.drho.size() == n &&
                     q.pressure.size() == n && q.distance.size() == n && q.foot.size() == n &&
-                    q.elfs.size() == n,
+                    q.elfs.size() == n && q.birth.size() == n && q.born.size() == n,
                 "sph: the saved particle arrays differ in length");
   for (std::size_t i = 0; i < n; ++i) {
     LIQUID_VERIFY(q.level[i] >= 0 && q.level[i] <= options_.max_level,
@@ -966,6 +975,12 @@ void AdaptiveSph<Dim>::restore(SphState<Dim> st) {
                   "sph: saved particle {} has a value that is not finite (velocity, acceleration, footpoint, "
                   "density rate, pressure; or a NaN distance or feature size)",
                   i);
+    LIQUID_VERIFY(static_cast<int>(q.birth[i]) >= 0 && static_cast<int>(q.birth[i]) <= 2 && q.born[i] >= -1 &&
+                      q.born[i] <= st.steps &&
+                      (q.born[i] >= 0) == (q.birth[i] != SphParticles<Dim>::Birth::seeded),
+                  "sph: saved particle {} has birth {} at step {}, not a split or merge at or before step {} "
+                  "(or a seeded particle, at -1)",
+                  i, static_cast<int>(q.birth[i]), q.born[i], st.steps);
     const double rho0 = options_.fluid.rest_density;
     LIQUID_VERIFY(q.density[i] > 0.0 && q.density[i] <= kMaxSavedDensity * rho0,
                   "sph: saved particle {} has density {}, outside (0, {} rest densities]", i, q.density[i],

@@ -84,6 +84,10 @@ struct SphView {
   double distance(const Vec<Dim>& x) const;
 };
 
+/// Churn's window, in resampling passes: a particle made by a split and merged within it, or made by
+/// a merge and split within it, counts as churn (ResampleStats::churn_merged, churn_split).
+inline constexpr int kChurnPasses = 3;
+
 template <int Dim>
 struct SphOptions {
   Box<Dim> container;                              ///< the tank: particles stay inside it
@@ -95,6 +99,10 @@ struct SphOptions {
   bool adaptive = true;
   int max_level = 3;       ///< coarsest level a merge may make
   int resample_every = 5;  ///< redistance / elfs / resample every k-th step (paper: 5)
+  /// A split's children are not merged for this many resampling passes (0: the paper's, no wait).
+  /// Churn (a particle made by a split merged, or one made by a merge split, within kChurnPasses
+  /// passes) is counted either way. Measured: docs/findings/sph.md.
+  int merge_min_passes = 0;
   /// alpha, beta (max_level is taken from above): the paper's 2 and 3 in 3D, beta 3.37 in 2D
   /// (ResampleOptions::for_dimension says why)
   ResampleOptions resampling = ResampleOptions::for_dimension(Dim);

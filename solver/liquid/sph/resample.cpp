@@ -59,6 +59,7 @@ struct Pass {
   const Sizes& sizes;
   const SolidTest<Dim>& solid;
   const int n_old;
+  std::int64_t now = 0, churn_window = 0;  ///< the clock stamped on new particles; churn's window
   std::vector<char> removed;
   std::vector<std::vector<int>> born_of;  ///< per old particle: the new particles made from or beside it
   ResampleStats stats;
@@ -74,9 +75,17 @@ struct Pass {
         born_of(p_.size()) {
     LIQUID_VERIFY(nbrs.n_particles() == n_old, "resample: {} particles, neighbour lists for {}", n_old,
                   nbrs.n_particles());
+    LIQUID_VERIFY(p.birth.size() == p.x.size() && p.born.size() == p.x.size(),
+                  "resample: {} particles, {} births and {} birth steps", n_old, p.birth.size(),
+                  p.born.size());
   }
 
   bool in_solid(const Vec<Dim>& x) const { return solid && solid(x); }
+
+  /// True when old particle i was made by `how` within the churn window.
+  bool young(int i, typename SphParticles<Dim>::Birth how) const {
+    return churn_window > 0 && p.birth[i] == how && p.born[i] >= 0 && now - p.born[i] < churn_window;
+  }
 
   /// The distance from x to the nearest live particle around old particle i (i itself and `skip`
   /// excluded), old or new.
@@ -151,6 +160,7 @@ struct Pass {
     if (d < nominal) ++stats.lowered;
     const Vec<Dim> x0 = p.x[i], v0 = p.v[i], a0 = p.a[i], foot = p.foot[i];
     const double elfs = p.elfs[i], rho = p.density[i];
+    stats.churn_split += young(i, SphParticles<Dim>::Birth::merge);
     removed[i] = 1;
     for (double sgn : {1.0, -1.0}) {
       const Vec<Dim> c = x0 + sgn * d * u;
@@ -158,6 +168,7 @@ struct Pass {
       const double dist = plane ? std::max(0.0, (foot - c).dot(out) / out_len) : 0.0;
       const int k = p.add(sizes, c, v0, level - 1, dist, rho);
       p.a[k] = a0, p.foot[k] = foot, p.elfs[k] = elfs;
+      p.birth[k] = SphParticles<Dim>::Birth::split, p.born[k] = now;
       born_of[i].push_back(k);
     }
     ++stats.split;
@@ -188,6 +199,9 @@ struct Pass {
       removed[i] = removed[j] = 1;
       const int k = p.add(sizes, c, v, level + 1, dist, rho);
       p.a[k] = a, p.foot[k] = foot, p.elfs[k] = elfs;
+      p.birth[k] = SphParticles<Dim>::Birth::merge, p.born[k] = now;
+      stats.churn_merged +=
+          young(i, SphParticles<Dim>::Birth::split) || young(j, SphParticles<Dim>::Birth::split);
       born_of[i].push_back(k), born_of[j].push_back(k);
       ++stats.merged;
       return true;
@@ -239,10 +253,17 @@ ResampleStats resample(SphParticles<Dim>& p, const NeighbourLists& nbrs, const S
                 "resample: alpha = {} and beta = {} must satisfy 0 < alpha < beta", options.alpha,
                 options.beta);
   Pass<Dim> pass(p, nbrs, sizes, solid);
+  pass.now = options.now, pass.churn_window = options.churn_window;
   const int n = pass.n_old;
   std::vector<char> to_merge(n, 0);
-  for (int i = 0; i < n; ++i)
+  for (int i = 0; i < n; ++i) {
     to_merge[i] = p.elfs[i] > options.beta * p.radius[i] && p.level[i] < options.max_level;
+    if (to_merge[i] && options.merge_min_age > 0 && p.birth[i] == SphParticles<Dim>::Birth::split &&
+        options.now - p.born[i] < options.merge_min_age) {
+      to_merge[i] = 0;
+      ++pass.stats.merge_waited;
+    }
+  }
   const std::vector<Vec<Dim>> base = base_directions<Dim>();
   for (int i = 0; i < n; ++i)
     if (p.level[i] > 0 && p.elfs[i] < options.alpha * p.radius[i]) pass.split(i, base, rng);

@@ -28,6 +28,14 @@ struct ResampleOptions {
   double alpha = 2.0;  ///< split when elfs < alpha r_i
   double beta = 3.0;   ///< merge when elfs > beta r_i (the paper's, for 3D; see for_dimension)
   int max_level = 3;   ///< no merge above this level
+  /// The caller's clock (steps), stamped on the particles a pass makes (SphParticles::born).
+  std::int64_t now = 0;
+  /// A particle a split made less than this long ago (on the clock above) is not merged: the
+  /// children of a split are not merged back before the flow has moved them (0: the paper's, no wait).
+  std::int64_t merge_min_age = 0;
+  /// Churn is counted over this window (on the clock above): a merge of a particle a split made,
+  /// or a split of one a merge made, less than this long ago. 0 counts none.
+  std::int64_t churn_window = 0;
 
   /// The paper's alpha = 2 and beta = 3 are for 3D, where a merged particle's radius grows by 2^(1/3):
   /// it merged at elfs > 3 r and splits again only below 2 * 2^(1/3) r = 2.52 r, a margin of 1.19.
@@ -57,6 +65,9 @@ struct ResampleStats {
   long split_skipped = 0;  ///< marked for a split but no valid placement at any tried distance
   long merge_skipped = 0;  ///< marked for a merge but no partner could merge
   long lowered = 0;        ///< splits placed closer than r_child / (2h)
+  long churn_merged = 0;   ///< merges with a partner a split made within ResampleOptions::churn_window
+  long churn_split = 0;    ///< splits of a particle a merge made within ResampleOptions::churn_window
+  long merge_waited = 0;   ///< marked for a merge but younger than ResampleOptions::merge_min_age
   /// The smallest (distance from a new child to its nearest other particle) / (r_child / (2h)) over
   /// the pass: 1 unless a split had to lower d. Infinite when nothing was split.
   double closest_child_ratio = SphParticles<2>::infinity;

@@ -46,6 +46,12 @@ struct SphParticles {
   std::vector<double> distance;  ///< d_i: the carried particle-to-surface distance (>= 0)
   std::vector<Vec<Dim>> foot;    ///< y_i: the closest surface point found by the last redistancing
   std::vector<double> elfs;      ///< extended local feature size of the last estimate
+  /// How the particle was made and when: by a split or a merge at step `born` (the resampling's
+  /// clock), or seeded / emitted (born -1). Resampling reads it to count churn and, when asked, to
+  /// keep a split's children from merging back at once.
+  enum class Birth : std::int8_t { seeded = 0, split = 1, merge = 2 };
+  std::vector<Birth> birth;
+  std::vector<std::int64_t> born;
 
   int size() const { return static_cast<int>(x.size()); }
 
@@ -64,6 +70,8 @@ struct SphParticles {
     distance.push_back(dist);
     foot.push_back(position);
     elfs.push_back(infinity);
+    birth.push_back(Birth::seeded);
+    born.push_back(-1);
     return size() - 1;
   }
 
@@ -75,12 +83,14 @@ struct SphParticles {
       if (n != i) {
         x[n] = x[i], v[n] = v[i], a[n] = a[i], level[n] = level[i], mass[n] = mass[i];
         radius[n] = radius[i], density[n] = density[i], drho[n] = drho[i], pressure[n] = pressure[i];
-        distance[n] = distance[i], foot[n] = foot[i], elfs[n] = elfs[i];
+        distance[n] = distance[i], foot[n] = foot[i], elfs[n] = elfs[i], birth[n] = birth[i],
+        born[n] = born[i];
       }
       ++n;
     }
     x.resize(n), v.resize(n), a.resize(n), level.resize(n), mass.resize(n), radius.resize(n);
     density.resize(n), drho.resize(n), pressure.resize(n), distance.resize(n), foot.resize(n), elfs.resize(n);
+    birth.resize(n), born.resize(n);
   }
 
   double total_mass() const {

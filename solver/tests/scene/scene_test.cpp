@@ -82,6 +82,7 @@ TEST(Scene, ValuesAndOverridesReachTheSolverOptions) {
   EXPECT_EQ(s.pic.rbf.exponent, 3);  // the default transfer; reseeding left to the method (top-up)
   EXPECT_EQ(s.pic.rbf.degree, 1);
   EXPECT_EQ(s.pic.reseeding.lo, 0);
+  EXPECT_TRUE(s.pic.refill_emptied);
   EXPECT_FALSE(s.paper_preset);
   {
     // --paper: the paper's transfer and its reseeding band, remembered by the scene.
@@ -95,6 +96,7 @@ TEST(Scene, ValuesAndOverridesReachTheSolverOptions) {
     EXPECT_EQ(paper.pic.rbf.degree, 2);
     EXPECT_EQ(paper.pic.reseeding.lo, 3);
     EXPECT_EQ(paper.pic.reseeding.hi, 12);
+    EXPECT_FALSE(paper.pic.refill_emptied);
   }
   {
     // [solver] preset = "paper" does the same; a key after it overrides what the preset set.

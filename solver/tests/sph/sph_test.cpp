@@ -765,6 +765,64 @@ TEST(SphResample, SplitAndMergeConserveMassAndMomentum3D) {
   split_and_merge_conserve<3>();
 }
 
+// Resampling stamps what it makes (split or merge, and the clock), keeps a split's children from
+// merging until they are merge_min_age old, and counts churn: merges of a split's child and splits of a
+// merged particle within the churn window.
+TEST(SphResample, BirthsAreStampedYoungChildrenWaitAndChurnIsCounted) {
+  Sizes sizes;
+  sizes.radius = 0.1;
+  SphParticles<2> p = random_particles<2>(sizes, 400, 7);
+  for (int i = 0; i < p.size(); ++i)
+    p.level[i] = 2, p.mass[i] = sizes.mass_of(2), p.radius[i] = sizes.radius_of<2>(2);
+  std::mt19937_64 rng(3);
+  ResampleOptions o;
+  o.churn_window = 10;
+  const auto pass = [&](double elfs, std::int64_t now, std::int64_t min_age) {
+    for (double& e : p.elfs) e = elfs;
+    const PointTree<2> tree(p.x);
+    const NeighbourLists nbrs = find_neighbours<2>(tree, p.x, p.radius);
+    o.now = now, o.merge_min_age = min_age;
+    return resample<2>(p, nbrs, sizes, o, nullptr, rng);
+  };
+  // Every particle splits at t = 10: the children say so; their seeded parents were no churn.
+  const ResampleStats split = pass(0.0, 10, 0);
+  ASSERT_GT(split.split, 300);
+  EXPECT_EQ(split.churn_split, 0);
+  int children = 0;
+  for (int i = 0; i < p.size(); ++i)
+    if (p.level[i] == 1) {
+      ++children;
+      EXPECT_EQ(p.birth[i], SphParticles<2>::Birth::split);
+      EXPECT_EQ(p.born[i], 10);
+    }
+  EXPECT_EQ(children, 2 * split.split);
+  // At t = 12 they are 2 old: with a wait of 5 none merges, and each marked child is counted waiting.
+  const ResampleStats early = pass(1e9, 12, 5);
+  EXPECT_EQ(early.merged, 0);
+  EXPECT_EQ(early.merge_waited, children);
+  // At t = 16 (6 old) they merge, and every merge is churn: its partners were split 6 steps before.
+  const ResampleStats later = pass(1e9, 16, 5);
+  ASSERT_GT(later.merged, 50);
+  EXPECT_EQ(later.merge_waited, 0);
+  EXPECT_EQ(later.churn_merged, later.merged);
+  int merges = 0;
+  for (int i = 0; i < p.size(); ++i) {
+    if (p.birth[i] != SphParticles<2>::Birth::merge) continue;
+    ++merges;
+    EXPECT_EQ(p.born[i], 16);
+  }
+  EXPECT_EQ(merges, later.merged);
+  // Splitting again at t = 18: the merged particles split within the window count as churn; with a
+  // window of 2 (made at 16, now 18: not less than 2 steps old) none does.
+  const SphParticles<2> saved = p;
+  const std::mt19937_64 saved_rng = rng;
+  const ResampleStats again = pass(0.0, 18, 0);
+  EXPECT_GT(again.churn_split, 0);
+  EXPECT_LE(again.churn_split, merges);
+  p = saved, rng = saved_rng, o.churn_window = 2;
+  EXPECT_EQ(pass(0.0, 18, 0).churn_split, 0);
+}
+
 template <int Dim>
 ::testing::AssertionResult kept_lists_are_a_search(const AdaptiveSph<Dim>& sim, double skin) {
   const auto built = sim.built_positions();
