@@ -175,7 +175,7 @@ CaseResult run_case(double s, int seeds, const std::string& tag, Json& series, i
   if (seeds > 1)
     table.add_row({fmt::format("adaptive, median of {}", seeds), adaptive.particles, std::string("-"),
                    std::string("-"), adaptive.steps, adaptive.seconds_per_step, std::string("-"),
-                   std::string("-")});
+                   std::string("-"), std::string("-"), std::string("-")});
   const double memory = single.particles / adaptive.particles,
                speed = single.seconds_per_step / adaptive.seconds_per_step;
   Table gain("gain: memory (particles) / speed, ours beside the paper's Table 1",
