@@ -102,6 +102,14 @@ tree::CellGraph<Dim> initial_graph(const PicOptions<Dim>& o) {
   return tree::uniform<Dim>(o.domain, o.adaptive ? o.coarse_level : o.finest_level, graph_options(o));
 }
 
+/// The fluid cells that are not surface cells, ascending.
+std::vector<tree::CellId> interior_of(const Classification& cls) {
+  std::vector<tree::CellId> interior;
+  std::set_difference(cls.fluid.begin(), cls.fluid.end(), cls.surface.begin(), cls.surface.end(),
+                      std::back_inserter(interior));
+  return interior;
+}
+
 }  // namespace
 
 template <int Dim>
@@ -855,20 +863,17 @@ void AdaptivePic<Dim>::advect(double dt, PicStepReport& r) {
 }
 
 template <int Dim>
-void AdaptivePic<Dim>::reseed(PicStepReport& r, std::span<const std::uint8_t> was_interior) {
+void AdaptivePic<Dim>::reseed(PicStepReport& r, std::span<const tree::CellId> was_interior) {
   classify();
-  std::vector<tree::CellId> interior;
-  std::set_difference(cls_.fluid.begin(), cls_.fluid.end(), cls_.surface.begin(), cls_.surface.end(),
-                      std::back_inserter(interior));
+  std::vector<tree::CellId> interior = interior_of(cls_);
   // Cells inside the liquid at the step's start that it left empty: refilled as the holes are.
-  if (!was_interior.empty()) {
-    const std::size_t before = interior.size();
-    graph_.for_each_cell([&](tree::CellId c) {
-      if (static_cast<std::size_t>(c) < was_interior.size() && was_interior[c] &&
-          cls_.type[c] == CellType::air)
-        interior.push_back(c);
-    });
-    if (interior.size() > before) std::sort(interior.begin(), interior.end());
+  std::vector<tree::CellId> emptied;
+  for (tree::CellId c : was_interior)
+    if (cls_.type[c] == CellType::air) emptied.push_back(c);
+  if (!emptied.empty()) {
+    std::vector<tree::CellId> all(interior.size() + emptied.size());
+    std::merge(interior.begin(), interior.end(), emptied.begin(), emptied.end(), all.begin());
+    interior.swap(all);
   }
   // Holes opened by this step's advection are refilled with the rest.
   particles::ReseedOptions o = options_.reseeding;
@@ -901,12 +906,9 @@ PicStepReport AdaptivePic<Dim>::advance(double dt) {
     if (!options_.sources.empty()) phase("sources", [&] { apply_sources(r); });
     phase("classify", [&] { classify(); });
     if (options_.adaptive) phase("grid", [&] { adapt_grid(r); });
-    std::vector<std::uint8_t> was_interior;
-    if (options_.adaptive && options_.reseed && options_.refill_emptied) {
-      was_interior.assign(graph_.cell_capacity(), 0);
-      for (tree::CellId c : cls_.fluid) was_interior[c] = 1;
-      for (tree::CellId c : cls_.surface) was_interior[c] = 0;
-    }
+    const std::vector<tree::CellId> was_interior =
+        options_.adaptive && options_.reseed && options_.refill_emptied ? interior_of(cls_)
+                                                                        : std::vector<tree::CellId>{};
     phase("p2g", [&] { to_faces(r); });
     phase("forces", [&] { forces(dt); });
     if (options_.projection == PicProjection::split) phase("gravity", [&] { project_gravity(dt, r); });

@@ -313,11 +313,11 @@ class AdaptivePic {
   double grid_energy() const;  ///< see PicStepReport::grid_energy_before
   void to_particles(PicStepReport& r);
   void advect(double dt, PicStepReport& r);
-  /// was_interior (adaptive runs; by cell id, or empty): the cells that were fluid and not surface
+  /// was_interior (adaptive runs; ascending, or empty): the cells that were fluid and not surface
   /// when the step began. Such a cell left empty by the advection is refilled: with the step's CFL
   /// the air cannot have reached it, so it was emptied by the sparse particles of coarser cells
   /// upstream, not by the surface.
-  void reseed(PicStepReport& r, std::span<const std::uint8_t> was_interior);
+  void reseed(PicStepReport& r, std::span<const tree::CellId> was_interior);
   particles::VelocitySource<Dim> grid_velocity() const;
   void check_faces(const char* phase) const;
   void check_particles(const char* phase) const;

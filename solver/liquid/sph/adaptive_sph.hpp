@@ -131,9 +131,9 @@ struct SphOptions {
   /// splits and merges). Why this default: docs/findings/sph.md.
   bool wall_footpoints = true;
   /// How the redistancing and feature-size marches run: the paper's priority queue on one thread, or
-  /// rounds on all threads (march.hpp). The queue stays the default because the rounds, though
-  /// faster, settle on other footpoints where the fixed point is not unique and so change the
-  /// resampling. Why: docs/findings/sph.md.
+  /// rounds on all threads (march.hpp). The queue stays the default: the rounds settle on other
+  /// footpoints where the fixed point is not unique, which changes the resampling, and they pay only
+  /// on large particle sets. Why: docs/findings/sph.md.
   MarchOrder march = MarchOrder::serial;
   double restitution = 0.0;  ///< normal velocity kept (reversed) at a wall
   std::uint64_t seed = 1;    ///< the split directions' random stream

@@ -52,6 +52,13 @@ std::vector<Vec<Dim>> turned(const std::vector<Vec<Dim>>& base, std::mt19937_64&
   return out;
 }
 
+/// True when particle i was made by `how` (a split or a merge) less than `window` before `now`.
+template <int Dim>
+bool made_within(const SphParticles<Dim>& p, int i, typename SphParticles<Dim>::Birth how, std::int64_t now,
+                 std::int64_t window) {
+  return window > 0 && p.birth[i] == how && p.born[i] >= 0 && now - p.born[i] < window;
+}
+
 template <int Dim>
 struct Pass {
   SphParticles<Dim>& p;
@@ -84,7 +91,7 @@ struct Pass {
 
   /// True when old particle i was made by `how` within the churn window.
   bool young(int i, typename SphParticles<Dim>::Birth how) const {
-    return churn_window > 0 && p.birth[i] == how && p.born[i] >= 0 && now - p.born[i] < churn_window;
+    return made_within(p, i, how, now, churn_window);
   }
 
   /// The distance from x to the nearest live particle around old particle i (i itself and `skip`
@@ -258,8 +265,8 @@ ResampleStats resample(SphParticles<Dim>& p, const NeighbourLists& nbrs, const S
   std::vector<char> to_merge(n, 0);
   for (int i = 0; i < n; ++i) {
     to_merge[i] = p.elfs[i] > options.beta * p.radius[i] && p.level[i] < options.max_level;
-    if (to_merge[i] && options.merge_min_age > 0 && p.birth[i] == SphParticles<Dim>::Birth::split &&
-        options.now - p.born[i] < options.merge_min_age) {
+    if (to_merge[i] &&
+        made_within(p, i, SphParticles<Dim>::Birth::split, options.now, options.merge_min_age)) {
       to_merge[i] = 0;
       ++pass.stats.merge_waited;
     }

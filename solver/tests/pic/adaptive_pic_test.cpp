@@ -84,17 +84,12 @@ TEST(AdaptivePic, DamBreakRunsStableAndSpreads2D) {
   }
 }
 
-// The liquid's surface drops into the tree's coarse interior (particles above y = 0.3 removed from a
+// The liquid's surface drops into the tree's coarser interior (particles above y = 0.3 removed from a
 // settled pool whose band lies at y = 0.5): after one short step every surface cell is at the finest
 // level. Refining one level a step instead leaves coarse surface cells, whose empty children then
 // split off as air and take liquid volume with them.
 TEST(AdaptivePic, ASurfaceInCoarseCellsIsRefinedToTheFinestLevelWithinTheStep) {
-  pic::PicOptions<2> o;
-  o.finest_level = 7;
-  o.coarse_level = 4;
-  pic::AdaptivePic<2> settled(o);
-  settled.seed(levelset::box<2>({Vec<2>::Zero(), Vec<2>(1.0, 0.5)}));
-  pic::PicState<2> s = settled.state();
+  const pic::PicState<2> s = pool<2>(true, pic::PicTransfer::rbf, 7).state();  // interior at level 5
   pic::PicState<2> low = s;
   low.x.clear(), low.v.clear(), low.particle_cell.clear();
   for (auto& f : low.field_values) f.clear();
@@ -106,6 +101,9 @@ TEST(AdaptivePic, ASurfaceInCoarseCellsIsRefinedToTheFinestLevelWithinTheStep) {
       for (int k = 0; k < s.field_components[f]; ++k)
         low.field_values[f].push_back(s.field_values[f][s.field_components[f] * i + k]);
   }
+  pic::PicOptions<2> o;  // pool()'s
+  o.finest_level = 7;
+  o.coarse_level = 5;
   pic::AdaptivePic<2> sim(o);
   sim.restore(low);
   int coarse = 0;
