@@ -7,7 +7,8 @@
 // 2^d jittered Halton particles per cell, so every method sees the same data. Methods: 0 rbf
 // (paper), 1 cubic mls, 2 linear fit, 3 PIC (multilinear), 4 APIC, 5 rbf with each cell's own
 // factorisation (share_factors = false; face -> particle only), 6 rbf with the full Hager-Higham
-// condition estimate (particle -> face only; the default takes two probes).
+// condition estimate (particle -> face only; the default takes two probes), 7 and 8 PIC and APIC
+// as a gather (particle -> face only; the scatter's reference).
 #include <benchmark/benchmark.h>
 
 #include <memory>
@@ -22,7 +23,8 @@ namespace liquid {
 namespace {
 
 const char* kMethodNames[] = {
-    "rbf", "mls", "linear", "pic", "apic", "rbf, own factors", "rbf, full condition estimate"};
+    "rbf", "mls", "linear", "pic", "apic", "rbf, own factors", "rbf, full condition estimate",
+                              "pic, gather", "apic, gather"};
 
 template <int Dim>
 struct Scene {
@@ -73,10 +75,14 @@ void BM_ToFaces(benchmark::State& state) {
   for (auto _ : state) {
     if (method < 3 || method == 6)
       transfer::particles_to_faces<Dim>(s.graph, s.particles, s.bins, scattered(method), out);
-    else
+    else if (method < 7)
       transfer::linear_to_faces<Dim>(
           s.graph, *s.lattice, s.particles, s.bins,
           method == 3 ? transfer::RegularScheme::pic : transfer::RegularScheme::apic, {}, out);
+    else
+      transfer::linear_to_faces_gather<Dim>(
+          s.graph, *s.lattice, s.particles, s.bins,
+          method == 7 ? transfer::RegularScheme::pic : transfer::RegularScheme::apic, {}, out);
     benchmark::DoNotOptimize(out.value.data());
   }
   state.SetLabel(kMethodNames[method]);
@@ -147,8 +153,8 @@ void BM_Binning(benchmark::State& state) {
 
 BENCHMARK_TEMPLATE(BM_Binning, 2)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK_TEMPLATE(BM_Binning, 3)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK_TEMPLATE(BM_ToFaces, 2)->DenseRange(0, 4)->Arg(6)->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK_TEMPLATE(BM_ToFaces, 3)->DenseRange(0, 4)->Arg(6)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK_TEMPLATE(BM_ToFaces, 2)->DenseRange(0, 4)->DenseRange(6, 8)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK_TEMPLATE(BM_ToFaces, 3)->DenseRange(0, 4)->DenseRange(6, 8)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK_TEMPLATE(BM_ToParticles, 2)->DenseRange(0, 5)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK_TEMPLATE(BM_ToParticles, 3)->DenseRange(0, 5)->Unit(benchmark::kMillisecond)->UseRealTime();
 

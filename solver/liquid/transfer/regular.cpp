@@ -1,6 +1,9 @@
 #include "liquid/transfer/regular.hpp"
 
+#include <algorithm>
+#include <array>
 #include <cmath>
+#include <mutex>
 
 #include <fmt/format.h>
 #include <Eigen/Geometry>
@@ -152,11 +155,120 @@ template <int Dim>
 TransferReport linear_to_faces(const tree::CellGraph<Dim>& graph, const RegularLattice<Dim>& lattice,
                                const particles::Particles<Dim>& particles, const particles::CellBins& bins,
                                RegularScheme scheme, std::span<const double> masses, FaceValues& out) {
-  LIQUID_VERIFY(bins.n_particles() == particles.size(),
-                "linear_to_faces: bins hold {} particles, there are {}", bins.n_particles(),
-                particles.size());
+  LIQUID_VERIFY(bins.n_particles() == particles.size(), "linear_to_faces: bins hold {} particles, there are {}",
+                bins.n_particles(), particles.size());
   LIQUID_VERIFY(masses.empty() || static_cast<int>(masses.size()) == particles.size(),
                 "linear_to_faces: {} masses for {} particles", masses.size(), particles.size());
+  std::span<const double> affine;
+  if (scheme == RegularScheme::apic) affine = particles.field(particles.field_index("apic"));
+  out.reset(graph.face_capacity());
+  // A scatter: each particle is read once and adds its weight and momentum to the 2^Dim lattice
+  // faces of each component. A particle in lattice cell z (along the slowest axis, Dim - 1) reaches
+  // faces z - 1 .. z + 1 there, so slabs two cells thick that are two slabs apart never share a
+  // face: the even slabs run in parallel, then the odd ones. A face's sum then takes its particles
+  // in a fixed order (even slab, then odd; cells in lattice order; particles in bin order), the same
+  // on any thread count.
+  constexpr int top = Dim - 1;
+  const long n = lattice.n();
+  std::array<long, Dim> n_faces{};
+  std::array<std::vector<double>, Dim> sum, mass;
+  for (int k = 0; k < Dim; ++k) {
+    n_faces[k] = 1;
+    for (int j = 0; j < Dim; ++j) n_faces[k] *= lattice.extent(k, j);
+    sum[k].assign(n_faces[k], 0.0);
+    mass[k].assign(n_faces[k], 0.0);
+  }
+  long cells_per_layer = 1;
+  for (int j = 0; j < top; ++j) cells_per_layer *= n;
+  const auto cell_layer = [&](const Vec<Dim>& x) {
+    const double s = std::floor((x[top] - lattice.origin()[top]) / lattice.h()[top]);
+    return static_cast<long>(std::clamp(s, 0.0, static_cast<double>(n - 1)));
+  };
+  const auto add = [&](std::int32_t p) {
+    const Vec<Dim>& xp = particles.x[p];
+    const double m = masses.empty() ? 1.0 : masses[p];
+    for (int k = 0; k < Dim; ++k) {
+      const LinearStencil<Dim> st(lattice, k, xp);
+      double* const s_k = sum[k].data();
+      double* const m_k = mass[k].data();
+      for (int corner = 0; corner < (1 << Dim); ++corner) {
+        const double w = multilinear_weight<Dim>(st.t, corner) * m;
+        if (w == 0.0) continue;
+        IVec<Dim> a = st.base;
+        for (int j = 0; j < Dim; ++j) a[j] += (corner >> j) & 1;
+        double u = particles.v[p][k];
+        if (!affine.empty()) {
+          const Vec<Dim> xf = lattice.face_position(k, a);
+          for (int j = 0; j < Dim; ++j) u += affine[(p * Dim + k) * Dim + j] * (xf[j] - xp[j]);
+        }
+        const long flat = lattice.flat_face(k, a);
+        s_k[flat] += w * u;
+        m_k[flat] += w;
+      }
+    }
+  };
+  // A particle binned in a cell it is not inside (round-off at a face) may reach past its slab's
+  // margin: those few are added serially after the slabs.
+  std::vector<std::int32_t> strays;
+  std::mutex strays_mutex;
+  const long n_slabs = (n + 1) / 2;
+  for (int colour = 0; colour < 2; ++colour) {
+    const long n_coloured = (n_slabs - colour + 1) / 2;
+    parallel_for(
+        n_coloured, [] { return std::vector<std::int32_t>{}; },
+        [&](std::vector<std::int32_t>& mine, long q) {
+          const long slab = 2 * q + colour;
+          for (long z = 2 * slab; z < std::min(2 * slab + 2, n); ++z)
+            for (long i = 0; i < cells_per_layer; ++i) {
+              IVec<Dim> a;
+              long rest = i;
+              for (int j = 0; j < top; ++j) a[j] = rest % n, rest /= n;
+              a[top] = z;
+              for (std::int32_t p : bins.of(lattice.cell(a))) {
+                if (cell_layer(particles.x[p]) != z) {
+                  mine.push_back(p);
+                  continue;
+                }
+                add(p);
+              }
+            }
+        },
+        [&](std::vector<std::int32_t>& mine) {
+          std::lock_guard lock(strays_mutex);
+          strays.insert(strays.end(), mine.begin(), mine.end());
+        },
+        1);
+  }
+  std::sort(strays.begin(), strays.end());
+  for (std::int32_t p : strays) add(p);
+
+  TransferReport total;
+  for (int k = 0; k < Dim; ++k) {
+    total.targets += n_faces[k];
+    for (long flat = 0; flat < n_faces[k]; ++flat) {
+      const tree::FaceId f = lattice.face_at(k, flat);
+      if (mass[k][flat] > 0.0) {
+        out.value[f] = sum[k][flat] / mass[k][flat];
+        out.known[f] = 1;
+        out.weight[f] = mass[k][flat];
+      } else {
+        ++total.empty;
+      }
+    }
+  }
+  total.max_degree_used = 1;
+  return total;
+}
+
+template <int Dim>
+TransferReport linear_to_faces_gather(const tree::CellGraph<Dim>& graph, const RegularLattice<Dim>& lattice,
+                               const particles::Particles<Dim>& particles, const particles::CellBins& bins,
+                               RegularScheme scheme, std::span<const double> masses, FaceValues& out) {
+  LIQUID_VERIFY(bins.n_particles() == particles.size(),
+                "linear_to_faces_gather: bins hold {} particles, there are {}", bins.n_particles(),
+                particles.size());
+  LIQUID_VERIFY(masses.empty() || static_cast<int>(masses.size()) == particles.size(),
+                "linear_to_faces_gather: {} masses for {} particles", masses.size(), particles.size());
   std::span<const double> affine;
   if (scheme == RegularScheme::apic) affine = particles.field(particles.field_index("apic"));
   out.reset(graph.face_capacity());
@@ -351,6 +463,9 @@ Eigen::Vector3d face_angular_momentum(const tree::CellGraph<Dim>& graph, const F
   template TransferReport linear_to_faces<D>(const tree::CellGraph<D>&, const RegularLattice<D>&,          \
                                              const particles::Particles<D>&, const particles::CellBins&,   \
                                              RegularScheme, std::span<const double>, FaceValues&);         \
+  template TransferReport linear_to_faces_gather<D>(const tree::CellGraph<D>&, const RegularLattice<D>&,   \
+                                                    const particles::Particles<D>&, const particles::CellBins&, \
+                                                    RegularScheme, std::span<const double>, FaceValues&);  \
   template TransferReport linear_to_points<D>(const RegularLattice<D>&, std::span<const double>,           \
                                               std::span<const Vec<D>>, std::span<Vec<D>>,                  \
                                               std::span<double>);                                          \

@@ -16,8 +16,8 @@
 // sum_p m_p (x_p x v_p + sum_k (D_k c_k) x e_k), exactly (up to round-off) wherever the stencils
 // are whole (particles at least a cell away from walls).
 //
-// Particle -> face is a gather (every face reads the particles of the 2 x 3^(Dim-1) cells its hat
-// covers), so no atomics and the same sums on any thread count.
+// Particle -> face is a scatter in slabs that never share a face (each particle read once), so no
+// atomics and the same sums on any thread count.
 
 #include <cstdint>
 #include <span>
@@ -50,10 +50,14 @@ class RegularLattice {
   /// Number of axis-k lattice positions along axis j.
   long extent(int k, int j) const { return j == k ? n_ + 1 : n_; }
   Vec<Dim> face_position(int k, const IVec<Dim>& a) const;
+  /// Index of the axis-k face at address a among that axis' lattice faces (axis 0 fastest); a must
+  /// be inside.
+  long flat_face(int k, const IVec<Dim>& a) const;
+  /// The axis-k face of flat index `flat`.
+  tree::FaceId face_at(int k, long flat) const { return faces_[k][flat]; }
 
  private:
   long flat_cell(const IVec<Dim>& a) const;
-  long flat_face(int k, const IVec<Dim>& a) const;
   int level_ = 0;
   long n_ = 0;
   Vec<Dim> h_, lo_;
@@ -91,6 +95,15 @@ template <int Dim>
 TransferReport linear_to_faces(const tree::CellGraph<Dim>& graph, const RegularLattice<Dim>& lattice,
                                const particles::Particles<Dim>& particles, const particles::CellBins& bins,
                                RegularScheme scheme, std::span<const double> masses, FaceValues& out);
+
+/// The same transfer as a gather (every face reads the particles of the 2 x 3^(Dim-1) cells its hat
+/// covers): the definition the scatter is tested against and benchmarked beside. Equal to
+/// linear_to_faces up to the order of each face's sum.
+template <int Dim>
+TransferReport linear_to_faces_gather(const tree::CellGraph<Dim>& graph, const RegularLattice<Dim>& lattice,
+                                      const particles::Particles<Dim>& particles,
+                                      const particles::CellBins& bins, RegularScheme scheme,
+                                      std::span<const double> masses, FaceValues& out);
 
 /// Face -> point on a uniform tree: v (out) at every x. With `affine` non-empty (Dim*Dim doubles per
 /// point) APIC's matrix C is written there too.

@@ -392,7 +392,7 @@ TEST(SphScene, ResumedRunEndsBitForBitLikeTheUninterruptedOne) {
   EXPECT_EQ(fs.churn_merged, rs.churn_merged);  // the particles' births travel in the checkpoint
   EXPECT_EQ(fs.churn_split, rs.churn_split);
   const auto& born = full.solver().particles().born;
-  EXPECT_TRUE(std::any_of(born.begin(), born.end(), [](std::int64_t b) { return b >= 0; }));
+  EXPECT_TRUE(std::any_of(born.begin(), born.end(), [](std::int64_t step) { return step >= 0; }));
   EXPECT_EQ(born, resumed.solver().particles().born);
   EXPECT_EQ(full.solver().particles().birth, resumed.solver().particles().birth);
   EXPECT_EQ(fs.max_density_error, rs.max_density_error);
