@@ -485,7 +485,7 @@ void AdaptivePic<Dim>::to_faces(PicStepReport& r) {
   }
   u_ = std::move(faces.value);
   known_ = std::move(faces.known);
-  transfer::extrapolate_faces<Dim>(graph_, options_.extrapolation_layers, u_, known_);
+  extrapolate();
   u_transferred_ = u_;
   check_faces("p2g");
 }
@@ -783,7 +783,10 @@ double AdaptivePic<Dim>::grid_energy() const {
 
 template <int Dim>
 void AdaptivePic<Dim>::extrapolate() {
-  transfer::extrapolate_faces<Dim>(graph_, options_.extrapolation_layers, u_, known_);
+  if (lattice_)
+    transfer::extrapolate_lattice<Dim>(*lattice_, options_.extrapolation_layers, u_, known_);
+  else
+    transfer::extrapolate_faces<Dim>(graph_, options_.extrapolation_layers, u_, known_);
 }
 
 template <int Dim>

@@ -1,9 +1,11 @@
 #include "liquid/transfer/extrapolate.hpp"
 
 #include <algorithm>
+#include <array>
 
 #include "liquid/core/error.hpp"
 #include "liquid/core/parallel.hpp"
+#include "liquid/transfer/regular.hpp"
 
 namespace liquid::transfer {
 
@@ -166,9 +168,179 @@ ExtrapolationReport extrapolate_faces(const tree::CellGraph<Dim>& graph, int lay
   return report;
 }
 
+namespace {
+
+/// The same-axis faces in the neighbourhood of a lattice face of axis `axis`, as offsets: the axis
+/// faces of the two cells beside it and of their face neighbours. Along the axis: -2 .. 2; one step
+/// across along another axis: -1 .. 1 along the axis. A wall drops exactly the offsets that leave
+/// the lattice (the cells that would hold them are outside the domain).
+template <int Dim>
+struct LatticeNeighbourhood {
+  static constexpr int size = 5 + 6 * (Dim - 1);
+  std::array<IVec<Dim>, size> step;
+  explicit LatticeNeighbourhood(int axis) {
+    int i = 0;
+    for (int m = -2; m <= 2; ++m) {
+      IVec<Dim> d = IVec<Dim>::Zero();
+      d[axis] = m;
+      step[i++] = d;
+    }
+    for (int j = 0; j < Dim; ++j) {
+      if (j == axis) continue;
+      for (int side : {-1, 1})
+        for (int m = -1; m <= 1; ++m) {
+          IVec<Dim> d = IVec<Dim>::Zero();
+          d[j] = side;
+          d[axis] = m;
+          step[i++] = d;
+        }
+    }
+  }
+};
+
+/// Faces of one axis in lattice order, with the flat index of each neighbour (-1 where it leaves
+/// the lattice).
+template <int Dim>
+struct AxisFaces {
+  IVec<Dim> extent;
+  std::array<long, Dim> stride{};
+  LatticeNeighbourhood<Dim> nb;
+  AxisFaces(const RegularLattice<Dim>& lattice, int axis) : nb(axis) {
+    long s = 1;
+    for (int j = 0; j < Dim; ++j) extent[j] = lattice.extent(axis, j), stride[j] = s, s *= extent[j];
+  }
+  /// Calls visit(flat) for each neighbour of the face at `flat` inside the lattice, in a fixed order.
+  template <class Visit>
+  void for_each_neighbour(long flat, Visit&& visit) const {
+    IVec<Dim> a;
+    long rest = flat;
+    for (int j = 0; j < Dim; ++j) a[j] = rest % extent[j], rest /= extent[j];
+    for (const IVec<Dim>& d : nb.step) {
+      long g = flat;
+      bool inside = true;
+      for (int j = 0; j < Dim; ++j) {
+        const long x = a[j] + d[j];
+        inside = inside && x >= 0 && x < extent[j];
+        g += d[j] * stride[j];
+      }
+      if (inside && visit(g)) return;
+    }
+  }
+};
+
+}  // namespace
+
+template <int Dim>
+ExtrapolationReport extrapolate_lattice(const RegularLattice<Dim>& lattice, int layers, std::span<double> value,
+                                        std::span<std::uint8_t> known) {
+  LIQUID_VERIFY(layers >= 0, "extrapolate_lattice: {} layers", layers);
+  LIQUID_VERIFY(known.size() == value.size(), "extrapolate_lattice: {} values and {} flags", value.size(),
+                known.size());
+  ExtrapolationReport report;
+  // The axes fill independently: each one's counts per layer, merged below into the report.
+  std::array<std::vector<long>, Dim> per_axis;
+  long unknown_count = 0;
+  for (int k = 0; k < Dim; ++k) {
+    const AxisFaces<Dim> axis(lattice, k);
+    long n = 1;
+    for (int j = 0; j < Dim; ++j) n *= axis.extent[j];
+    // This axis' flags and values in lattice order, so neighbours are strided reads.
+    std::vector<std::uint8_t> kn(static_cast<std::size_t>(n));
+    std::vector<double> val(static_cast<std::size_t>(n));
+    for (long g = 0; g < n; ++g) {
+      const tree::FaceId f = lattice.face_at(k, g);
+      LIQUID_VERIFY(f >= 0 && static_cast<std::size_t>(f) < value.size(),
+                    "extrapolate_lattice: face {} outside the {} values", f, value.size());
+      kn[g] = known[f];
+      val[g] = value[f];
+    }
+    // The first layer's candidates: every unknown face with a known one in its neighbourhood.
+    std::vector<std::uint8_t> listed(static_cast<std::size_t>(n), 0);
+    parallel_for(
+        n,
+        [&](long g) {
+          if (kn[g]) return;
+          axis.for_each_neighbour(g, [&](long h) { return kn[h] ? (listed[g] = 1, true) : false; });
+        },
+        4096);
+    std::vector<long> candidates;
+    long unknown = 0;
+    for (long g = 0; g < n; ++g) {
+      unknown += kn[g] == 0;
+      if (listed[g]) candidates.push_back(g);
+    }
+    std::vector<double> next;
+    std::vector<std::uint8_t> filled;
+    for (int layer = 0; layer < layers && unknown > 0; ++layer) {
+      if (layer > 0) {
+        // The next candidates: unknown faces beside the faces just filled (the relation is
+        // symmetric; a candidate with no known neighbour is simply not filled).
+        std::vector<long> grown;
+        for (std::size_t i = 0; i < candidates.size(); ++i) {
+          if (!filled[i]) continue;
+          axis.for_each_neighbour(candidates[i], [&](long h) {
+            if (!listed[h] && !kn[h]) listed[h] = 1, grown.push_back(h);
+            return false;
+          });
+        }
+        candidates.swap(grown);
+      }
+      for (long g : candidates) listed[g] = 0;
+      next.assign(candidates.size(), 0.0);
+      filled.assign(candidates.size(), 0);
+      parallel_for(
+          static_cast<long>(candidates.size()),
+          [&](long i) {
+            double sum = 0.0;
+            long count = 0;
+            axis.for_each_neighbour(candidates[i], [&](long h) {
+              if (kn[h]) sum += val[h], ++count;
+              return false;
+            });
+            filled[i] = count > 0;
+            next[i] = count > 0 ? sum / static_cast<double>(count) : 0.0;
+          },
+          512);
+      long count = 0;
+      for (std::size_t i = 0; i < candidates.size(); ++i) {
+        if (!filled[i]) continue;
+        kn[candidates[i]] = 1;
+        val[candidates[i]] = next[i];
+        const tree::FaceId f = lattice.face_at(k, candidates[i]);
+        value[f] = next[i];
+        known[f] = 1;
+        ++count;
+      }
+      unknown -= count;
+      if (count == 0) break;
+      per_axis[k].push_back(count);
+    }
+    unknown_count += unknown;
+  }
+  // As the all-axes sweep reports: a count per layer while faces stay unknown, ending at the first
+  // layer that fills nothing.
+  long left = unknown_count;
+  for (int k = 0; k < Dim; ++k)
+    for (long c : per_axis[k]) left += c;
+  for (int layer = 0; layer < layers && left > 0; ++layer) {
+    long count = 0;
+    for (int k = 0; k < Dim; ++k)
+      if (layer < static_cast<int>(per_axis[k].size())) count += per_axis[k][layer];
+    report.filled.push_back(count);
+    left -= count;
+    if (count == 0) break;
+  }
+  report.left_unknown = unknown_count;
+  return report;
+}
+
 template ExtrapolationReport extrapolate_faces<2>(const tree::CellGraph<2>&, int, std::span<double>,
                                                   std::span<std::uint8_t>);
 template ExtrapolationReport extrapolate_faces<3>(const tree::CellGraph<3>&, int, std::span<double>,
                                                   std::span<std::uint8_t>);
+template ExtrapolationReport extrapolate_lattice<2>(const RegularLattice<2>&, int, std::span<double>,
+                                                    std::span<std::uint8_t>);
+template ExtrapolationReport extrapolate_lattice<3>(const RegularLattice<3>&, int, std::span<double>,
+                                                    std::span<std::uint8_t>);
 
 }  // namespace liquid::transfer

@@ -15,6 +15,9 @@
 
 namespace liquid::transfer {
 
+template <int Dim>
+class RegularLattice;
+
 struct ExtrapolationReport {
   std::vector<long> filled;  ///< faces filled per layer
   long left_unknown = 0;     ///< alive faces still unknown after the last layer (value left 0)
@@ -24,5 +27,12 @@ struct ExtrapolationReport {
 template <int Dim>
 ExtrapolationReport extrapolate_faces(const tree::CellGraph<Dim>& graph, int layers, std::span<double> value,
                                       std::span<std::uint8_t> known);
+
+/// The same extrapolation on a uniform tree, through its lattice: the same neighbourhoods, layers
+/// and report, the values equal up to the order of each mean's sum. The regular baselines' step
+/// uses it; its work per layer is the layer's faces, with no graph walks.
+template <int Dim>
+ExtrapolationReport extrapolate_lattice(const RegularLattice<Dim>& lattice, int layers, std::span<double> value,
+                                        std::span<std::uint8_t> known);
 
 }  // namespace liquid::transfer

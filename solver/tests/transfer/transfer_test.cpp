@@ -409,6 +409,58 @@ TYPED_TEST(TransferTest, ExtrapolationVisitsOnlyTheFrontYetMatchesTheDefinition)
   }
 }
 
+TYPED_TEST(TransferTest, LatticeExtrapolationMatchesTheDefinitionOnAnyThreadCount) {
+  // The regular baselines' extrapolation walks the lattice instead of the graph: the same faces in
+  // each layer as the definition, values to round-off, walls and corners included (a ball touching
+  // the box's side), known regions large and small, and the same bits on one thread as on two.
+  constexpr int Dim = TypeParam::value;
+  for (const int level : {1, 3, Dim == 2 ? 5 : 4}) {
+    const auto g = tree::uniform<Dim>(Box<Dim>{}, level);
+    const transfer::RegularLattice<Dim> lattice(g);
+    std::mt19937_64 rng(50 + level);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    Vec<Dim> centre = Vec<Dim>::Constant(0.5);
+    centre[0] = 0.1;
+    for (bool inside : {true, false})
+      for (int layers : {1, 3, 1000}) {
+        std::vector<double> value(g.face_capacity(), 0.0);
+        std::vector<std::uint8_t> known(g.face_capacity(), 0);
+        g.for_each_face([&](tree::FaceId f) {
+          const Vec<Dim> x = g.face_centre(f);
+          if (((x - centre).norm() < 0.3) == inside || u(rng) > 0.99) known[f] = 1, value[f] = u(rng);
+        });
+        std::vector<double> v1 = value, v2 = value, v3 = value;
+        std::vector<std::uint8_t> k1 = known, k2 = known, k3 = known;
+        const int threads = omp_get_max_threads();
+        omp_set_num_threads(1);
+        const transfer::ExtrapolationReport r = transfer::extrapolate_lattice<Dim>(lattice, layers, v1, k1);
+        omp_set_num_threads(std::max(2, threads));
+        transfer::extrapolate_lattice<Dim>(lattice, layers, v3, k3);
+        omp_set_num_threads(threads);
+        const std::vector<long> counts = extrapolate_by_definition<Dim>(g, layers, v2, k2);
+        EXPECT_EQ(r.filled, counts) << "level " << level << ", " << layers << " layers, known inside " << inside;
+        long unknown = 0, differ = 0;
+        double worst = 0.0;
+        g.for_each_face([&](tree::FaceId f) {
+          unknown += !k1[f];
+          differ += k1[f] != k2[f];
+          worst = std::max(worst, std::abs(v1[f] - v2[f]));
+        });
+        EXPECT_EQ(r.left_unknown, unknown);
+        EXPECT_EQ(differ, 0);
+        EXPECT_LT(worst, 1e-14);
+        EXPECT_EQ(v1, v3);
+        EXPECT_EQ(k1, k3);
+        // Every face fills in the end when its axis has a known face to start from.
+        std::array<bool, Dim> seeded{};
+        g.for_each_face([&](tree::FaceId f) { seeded[g.face(f).axis] = seeded[g.face(f).axis] || known[f]; });
+        if (layers == 1000 && std::all_of(seeded.begin(), seeded.end(), [](bool b) { return b; })) {
+          EXPECT_EQ(unknown, 0);
+        }
+      }
+  }
+}
+
 TYPED_TEST(TransferTest, ClampingKeepsValuesInTheRangeOfTheirSources) {
   constexpr int Dim = TypeParam::value;
   const auto g = random_tree<Dim>(41, 2);
