@@ -129,6 +129,7 @@ AdaptivePic<Dim>::AdaptivePic(const PicOptions<Dim>& options)
   known_.assign(graph_.face_capacity(), 1);
   p_.assign(graph_.cell_capacity(), 0.0);
   weights_ = std::make_unique<rbf::WeightCache<Dim>>(0x1p-24, std::size_t{1} << 14);
+  interpolants_ = std::make_unique<rbf::InterpolantCache<Dim>>(0x1p-24, std::size_t{1} << 13);
   // Made here, outside the timed phases: an AMG solver starts MPI when it is made.
   ppe_solver_ = linalg::make_solver(options_.solver);
 }
@@ -803,7 +804,7 @@ void AdaptivePic<Dim>::to_particles(PicStepReport& r) {
     // patches, a particle in a patch cell takes APIC's interpolation and matrix C; the others C = 0.
     if (!patches_) near_cells_ = near_liquid_cells();
     field_ = std::make_unique<transfer::FaceVelocityField<Dim>>(graph_, u_, known_, options_.rbf, near_cells_,
-                                                                patches_.get());
+                                                                patches_.get(), interpolants_.get());
     std::span<double> affine;
     if (patches_) affine = particles_.field(apic_field_);
     parallel_for(

@@ -346,6 +346,7 @@ class AdaptivePic {
   /// most of the last step's T-junction layouts, and an entry is a function of its layout alone.
   /// Emptied past 2^14 layouts (about 40 MB in 3D).
   std::unique_ptr<rbf::WeightCache<Dim>> weights_;
+  std::unique_ptr<rbf::InterpolantCache<Dim>> interpolants_;  // the RBF transfer's factors, kept across steps
   // The PPE solver, kept across steps: an AMG solver keeps its hierarchy while the layout stays.
   std::unique_ptr<linalg::LinearSolver> ppe_solver_;
   /// A box full of liquid makes the PPE a bordered system (zero mean), symmetric but indefinite:

@@ -26,8 +26,8 @@ template <int Dim>
 class InterpolantCache {
  public:
   /// `quantum`: offsets (units of h) closer than this share an entry. `max_entries` (0: no limit):
-  /// past about this many factorisations the cache is emptied (interpolants already handed out keep
-  /// theirs). The same order and meaning as WeightCache's.
+  /// about the most factorisations kept; those unused longest are dropped first (see ShapeMap;
+  /// interpolants already handed out keep theirs). The same order and meaning as WeightCache's.
   explicit InterpolantCache(double quantum = 0x1p-24, std::size_t max_entries = 4096);
 
   /// An interpolant of `nodes` (seen from `at`, the stencil's cell centre, with `h` its size). Its
@@ -40,7 +40,7 @@ class InterpolantCache {
   long hits() const { return map_.hits(); }
   long misses() const { return map_.misses(); }
   long bypassed() const { return bypassed_.load(std::memory_order_relaxed); }
-  long flushes() const { return map_.flushes(); }  ///< times emptied when full
+  long flushes() const { return map_.flushes(); }  ///< times its older half was dropped
   std::size_t size() const { return map_.size(); }
 
  private:

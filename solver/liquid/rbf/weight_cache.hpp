@@ -20,7 +20,8 @@ template <int Dim>
 class WeightCache {
  public:
   /// `quantum`: offsets (in units of h) closer than this share an entry. `max_entries` (0: no
-  /// limit): past this many entries the cache is emptied (a cache kept across many assemblies).
+  /// limit): about the most entries kept; those unused longest are dropped first (see ShapeMap), so
+  /// a cache kept across many assemblies keeps the shapes it keeps meeting.
   explicit WeightCache(double quantum = 0x1p-24, std::size_t max_entries = 0);
 
   /// Weights of `op` at `at` for `nodes`, with `h` the size of the centre cell. Same contract as
@@ -31,7 +32,7 @@ class WeightCache {
   long hits() const { return map_.hits(); }
   long misses() const { return map_.misses(); }
   long bypassed() const { return bypassed_.load(std::memory_order_relaxed); }  ///< off-quantum stencils
-  long flushes() const { return map_.flushes(); }                              ///< times emptied when full
+  long flushes() const { return map_.flushes(); }                              ///< times its older half was dropped
   std::size_t size() const;
   void clear();
 

@@ -23,7 +23,8 @@ template <int Dim>
 FaceVelocityField<Dim>::FaceVelocityField(const tree::CellGraph<Dim>& graph, std::span<const double> u,
                                           std::span<const std::uint8_t> known, const TransferOptions& options,
                                           std::span<const tree::CellId> cells,
-                                          const UniformPatches<Dim>* patches)
+                                          const UniformPatches<Dim>* patches,
+                                          rbf::InterpolantCache<Dim>* shared)
     : graph_(&graph),
       patches_(patches),
       u_(u.begin(), u.end()),
@@ -35,7 +36,12 @@ FaceVelocityField<Dim>::FaceVelocityField(const tree::CellGraph<Dim>& graph, std
                 "FaceVelocityField: {} face values for {} face ids", u.size(), graph.face_capacity());
   LIQUID_VERIFY(known.empty() || known.size() == u.size(), "FaceVelocityField: {} known flags for {} faces",
                 known.size(), u.size());
-  if (options.share_factors) cache_ = std::make_unique<rbf::InterpolantCache<Dim>>();
+  if (options.share_factors && shared) {
+    cache_ = shared;
+  } else if (options.share_factors) {
+    own_cache_ = std::make_unique<rbf::InterpolantCache<Dim>>();
+    cache_ = own_cache_.get();
+  }
   std::vector<tree::CellId> list(cells.begin(), cells.end());
   if (list.empty()) list = graph.cell_ids();
   if (patches_) std::erase_if(list, [&](tree::CellId c) { return patches_->cell(c); });
@@ -83,7 +89,7 @@ void FaceVelocityField<Dim>::prepare(tree::CellId c, CellInterpolants& out) cons
     out.hi[axis] = values.maxCoeff();
     out.fallback[axis] = values.mean();
     rbf::Interpolant<Dim> interp =
-        transfer::fitted_interpolant<Dim>(*graph_, c, nodes, stencil.values[axis], config, cache_.get());
+        transfer::fitted_interpolant<Dim>(*graph_, c, nodes, stencil.values[axis], config, cache_);
     if (interp.status().usable()) out.interp[axis].emplace(std::move(interp));
   }
 }

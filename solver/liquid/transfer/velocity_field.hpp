@@ -30,10 +30,13 @@ class FaceVelocityField {
   /// RBF (options.scheme must be rbf) on any tree. `u` and `known` (empty: all known) are copied.
   /// `cells`: the cells to prepare (empty: every cell); elsewhere an evaluation factorises on the
   /// fly. Evaluations are thread-safe. `patches` (optional; must outlive the field): its patch
-  /// cells are interpolated multilinearly and not prepared.
+  /// cells are interpolated multilinearly and not prepared. `shared` (optional, with
+  /// options.share_factors; must outlive the field): a factor cache kept by the caller, e.g. across
+  /// time steps, where the tree's stencil shapes repeat; the values are the same bits either way.
   FaceVelocityField(const tree::CellGraph<Dim>& graph, std::span<const double> u,
                     std::span<const std::uint8_t> known, const TransferOptions& options,
-                    std::span<const tree::CellId> cells = {}, const UniformPatches<Dim>* patches = nullptr);
+                    std::span<const tree::CellId> cells = {}, const UniformPatches<Dim>* patches = nullptr,
+                    rbf::InterpolantCache<Dim>* shared = nullptr);
   /// Multilinear interpolation on a uniform tree.
   FaceVelocityField(const tree::CellGraph<Dim>& graph, const RegularLattice<Dim>& lattice,
                     std::span<const double> u);
@@ -60,7 +63,8 @@ class FaceVelocityField {
   TransferOptions options_;
   std::vector<std::int32_t> slot_;  // per cell id: index into prepared_, or -1
   std::vector<std::unique_ptr<CellInterpolants>> prepared_;
-  std::unique_ptr<rbf::InterpolantCache<Dim>> cache_;  // shared factors (options.share_factors)
+  std::unique_ptr<rbf::InterpolantCache<Dim>> own_cache_;  // shared factors (options.share_factors)
+  rbf::InterpolantCache<Dim>* cache_ = nullptr;             // own_cache_, the caller's, or none
 };
 
 extern template class FaceVelocityField<2>;

@@ -506,8 +506,11 @@ TEST(Poisson, WeightCacheKeptAcrossAssembliesGivesTheSameBits) {
       const std::vector<double> a = face_normal_derivative<3>(plane, sys, PoissonOptions{}, p, cache);
       const std::vector<double> b = face_normal_derivative<3>(plane, alone, PoissonOptions{}, p);
       ASSERT_EQ(a.size(), b.size());
-      for (std::size_t f = 0; f < a.size(); ++f)
-        if (!std::isnan(b[f])) ASSERT_EQ(a[f], b[f]) << "face " << f;
+      for (std::size_t f = 0; f < a.size(); ++f) {
+        if (!std::isnan(b[f])) {
+          ASSERT_EQ(a[f], b[f]) << "face " << f;
+        }
+      }
     }
   }
   const PoissonSystem<3> again = assemble_poisson<3>(plane, neumann, PoissonOptions{}, &kept);

@@ -136,9 +136,16 @@ TEST(InterpolantCache, EntriesDependOnTheKeyAloneAndOffQuantumStencilsBypass) {
   const Vec<3> probe_at(0.1, 0.2, -0.3);
   for (unsigned seed : {1u, 2u, 3u})
     cache.interpolant(support::quadtree_stencil<3>(1, 1.0, seed), Vec<3>::Zero(), 1.0, Config{5, 2}, order);
+  // Two generations of one entry each: the fourth shape turned the second and third old, dropping
+  // the first two.
   EXPECT_EQ(cache.misses(), 4);
-  EXPECT_EQ(cache.flushes(), 1);
+  EXPECT_EQ(cache.flushes(), 2);
   EXPECT_LE(cache.size(), 2u);
+  // An old shape that is met again is kept (a hit), a dropped one is made again (a miss).
+  cache.interpolant(support::quadtree_stencil<3>(1, 1.0, 3u), Vec<3>::Zero(), 1.0, Config{5, 2}, order);
+  EXPECT_EQ(cache.hits(), 1);
+  cache.interpolant(support::quadtree_stencil<3>(1, 1.0, 1u), Vec<3>::Zero(), 1.0, Config{5, 2}, order);
+  EXPECT_EQ(cache.misses(), 5);
   early.fit(early_values);
   EXPECT_NEAR(early.value_at(probe_at), probe_at[0] - 2.0 * probe_at[1], 1e-12);
   EXPECT_THROW(cache.interpolant(base, Vec<3>::Zero(), 0.0, Config{5, 2}, order), Error);
