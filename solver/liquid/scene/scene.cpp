@@ -594,6 +594,7 @@ const std::vector<std::string> solver_keys = {"method",
                                               "nullspace",
                                               "transfer_exponent",
                                               "transfer_degree",
+                                              "ppe_degree",
                                               "patch_transfer",
                                               "level_change_p2g",
                                               "affine_outside_patches",
@@ -645,6 +646,9 @@ void read_pic_solver(const TableReader& r, Scene<Dim>& s) {
   LIQUID_VERIFY(o.rbf.exponent % 2 == 1, "{}: the PHS exponent must be odd (1, 3, 5, 7 or 9), got {}",
                 r.where("transfer_exponent"), o.rbf.exponent);
   o.rbf.degree = static_cast<int>(r.integer_in("transfer_degree", 0, 4, o.rbf.degree));
+  // The RBF-FD rows' and face gradients' polynomial degree at T-junctions (the PPE and projection).
+  o.poisson.rbf.degree = static_cast<int>(r.integer_in("ppe_degree", 1, 4, o.poisson.rbf.degree));
+  o.poisson.gradient_degree = o.poisson.rbf.degree;
   if (r.has("patch_transfer")) o.uniform_patches = r.choice("patch_transfer", {"apic", "rbf"}) == "apic";
   o.tent_at_level_changes = r.choice("level_change_p2g", {"rbf", "tent"}, std::string("rbf")) == "tent";
   LIQUID_VERIFY(!o.tent_at_level_changes || o.uniform_patches,

@@ -126,12 +126,14 @@ TEST(Scene, ValuesAndOverridesReachTheSolverOptions) {
     const auto at = toml.find("[solver]");
     const std::string keys =
         "\nshare_factors = false\ncondition_estimate = \"hager-higham\"\nnullspace = \"pin\""
-        "\ntransfer_exponent = 3\ntransfer_degree = 1\nreseed_mode = \"holes\"";
+        "\ntransfer_exponent = 3\ntransfer_degree = 1\nreseed_mode = \"holes\"\nppe_degree = 3";
     toml = at == std::string::npos ? toml + "\n[solver]" + keys + "\n" : toml.insert(at + 8, keys);
     const std::string path = ::testing::TempDir() + "/own-factors.toml";
     std::ofstream(path) << toml;
     const scene::Scene<2> own = scene::load_scene<2>(path);
     EXPECT_FALSE(own.pic.rbf.share_factors);
+    EXPECT_EQ(own.pic.poisson.rbf.degree, 3);  // ppe_degree: the RBF-FD rows and the face gradients
+    EXPECT_EQ(own.pic.poisson.gradient_degree, 3);
     EXPECT_EQ(own.pic.rbf.condition_estimate, rbf::ConditionEstimate::hager_higham);
     EXPECT_EQ(own.pic.poisson.nullspace, mac::Nullspace::pin);
     EXPECT_EQ(own.pic.rbf.exponent, 3);
