@@ -152,6 +152,10 @@ void add_study_flags(CLI::App& app, StudyFlags& f) {
          "sph-adaptivity-gain: a split's children are not merged for this many resampling passes (0 to "
          "1000; 0, the default, is the paper's)")
       ->check(CLI::Range(0, 1000));
+  app.add_option("--duration", f.duration,
+                 "pool-stability: simulated seconds of every row (0.1 to 3600; default 6, full tier 30)")
+      ->check(finite_number)
+      ->check(CLI::Range(0.1, 3600.0));
   app.add_option("--max-cells", f.max_cells, kMaxCellsHelp)->check(CLI::Range(1L, 1'000'000'000'000L));
   app.add_flag("--full", f.full, "use the full suite's extent");
 }
@@ -163,7 +167,7 @@ CaseOptions case_options(const StudyFlags& f, const CaseInfo& info) {
                    Option::ring_cap,     Option::rows,       Option::nullspace,       Option::tolerance,
                    Option::algebraic,    Option::perturb,    Option::trees,           Option::methods,
                    Option::seed,         Option::particles,  Option::radius,          Option::aspect,
-                   Option::merge_wait})
+                   Option::merge_wait, Option::duration})
     if (f.given(o) && !info.accepts_option(o)) refused.push_back(flag_of(o));
   if (!refused.empty()) {
     std::vector<std::string> accepted;
@@ -217,6 +221,7 @@ CaseOptions case_options(const StudyFlags& f, const CaseInfo& info) {
   if (f.given(Option::radius)) o.radius = f.radius;
   if (f.given(Option::aspect)) o.aspect = f.aspect;
   if (f.given(Option::merge_wait)) o.merge_wait = f.merge_wait;
+  if (f.given(Option::duration)) o.duration = f.duration;
   o.max_cells = f.max_cells;
   o.full = f.full;
   return o;
@@ -248,6 +253,7 @@ std::string echo(const std::string& case_name, const StudyFlags& f) {
   s += show(Option::radius, fmt::format("{:g}", f.radius));
   s += show(Option::aspect, fmt::format("{:g}", f.aspect));
   s += show(Option::merge_wait, std::to_string(f.merge_wait));
+  s += show(Option::duration, fmt::format("{:g}", f.duration));
   s += fmt::format(" --max-cells {} --tier {}", f.max_cells, f.full ? "full" : "quick");
   return s;
 }

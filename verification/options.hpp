@@ -33,6 +33,7 @@ struct StudyFlags {
   long particles = 0;
   double radius = 0.0, aspect = 1.0;
   int merge_wait = 0;
+  double duration = 0.0;
   long max_cells = 0;
   bool full = false;
 

@@ -53,6 +53,8 @@ const char* flag_of(Option option) {
       return "--aspect";
     case Option::merge_wait:
       return "--merge-wait";
+    case Option::duration:
+      return "--duration";
   }
   return "?";
 }

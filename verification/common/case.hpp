@@ -40,7 +40,8 @@ enum class Option {
   particles,
   radius,
   aspect,
-  merge_wait
+  merge_wait,
+  duration
 };
 using OptionSet = std::vector<Option>;
 /// The command-line flag of an option ("--max-jump").
@@ -104,6 +105,7 @@ struct CaseOptions {
   std::optional<double> radius;               ///< --radius R: a sampled sphere's radius (domain units)
   std::optional<double> aspect;               ///< --aspect A: a sampled box's width over its height
   std::optional<int> merge_wait;              ///< --merge-wait N: SPH, passes before a split's children merge
+  std::optional<double> duration;             ///< --duration T: simulated seconds of a long run
   long max_cells = 0;                         ///< budget: refuse rows above this many cells (0: no limit)
   bool full = false;                          ///< the full suite's extent rather than the quick one
 };

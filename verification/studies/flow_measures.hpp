@@ -20,6 +20,7 @@ struct FlowMethod {
   bool paper = false;
   bool everywhere = false;  ///< adaptive RBF with the RBF everywhere (no uniform patches)
   bool tent = false;        ///< adaptive RBF with tent particle -> face at level changes
+  int ppe_degree = 0;       ///< adaptive RBF: the RBF-FD rows' polynomial degree (0: the default)
 };
 /// The methods of `all` that --methods names, in the order named (every one when none is named);
 /// throws naming a method that is not one of them.

@@ -6,11 +6,12 @@
 // (adaptive-rbf: APIC in the tree's uniform patches, PHS r^3 + degree 1 across level changes with its
 // gradient as the particles' affine part, sparse cells topped up), with the RBF everywhere
 // (adaptive-rbf-everywhere, full tier: the default before the patches), with tent particle -> face
-// at level changes (adaptive-rbf-tent, full tier) and with the paper's preset
+// at level changes (adaptive-rbf-tent, full tier), with degree-3 RBF-FD rows (adaptive-rbf-ppe3, full
+// tier) and with the paper's preset
 // (adaptive-rbf-paper); regular APIC on the uniform tree at the finest level is the baseline. dt = min(0.02,
 // CFL 1). Rows: quick tier, the cubic 3D tank [0, 1]^3 at finest level 4 for 6 s; full tier, 2D and 3D tanks
 // (cubic, and 2:1:1 in 3D) at finest levels 4 and 5 for 30 s.
-// --levels A:B picks the finest levels, --methods the rows.
+// --levels A:B picks the finest levels, --methods the rows, --duration T the simulated seconds.
 // Measured: the largest particle speed |v_p| / sqrt(gH) at every step; its largest value over the
 // run and its value at the end; its exponential growth rate lambda (1/s): the least-squares slope of
 // ln max|v_p| against t over the second half of the run (once the first steps' transient is gone),
@@ -45,6 +46,7 @@ constexpr double kDepth = 0.3, kGravity = 9.81;
 const FlowMethod kMethods[] = {{"adaptive-rbf", true, pic::PicTransfer::rbf},
                                {"adaptive-rbf-everywhere", true, pic::PicTransfer::rbf, false, true},
                                {"adaptive-rbf-tent", true, pic::PicTransfer::rbf, false, false, true},
+                               {"adaptive-rbf-ppe3", true, pic::PicTransfer::rbf, false, false, false, 3},
                                {"adaptive-rbf-paper", true, pic::PicTransfer::rbf, true},
                                {"regular-apic", false, pic::PicTransfer::apic}};
 
@@ -96,6 +98,7 @@ Outcome run_pool(const FlowMethod& m, const Tank& tank) {
   if (m.paper) o.apply_paper_preset();
   if (m.everywhere) o.uniform_patches = false;
   if (m.tent) o.tent_at_level_changes = true, o.rbf_gradient_affine = false;
+  if (m.ppe_degree > 0) o.poisson.rbf.degree = o.poisson.gradient_degree = m.ppe_degree;
   pic::AdaptivePic<Dim> sim(o);
   Vec<Dim> hi = size;
   hi[1] = kDepth;
@@ -142,15 +145,16 @@ void study(const Tank& tank, const std::vector<FlowMethod>& methods, Table& tabl
     const std::string key = fmt::format("{}D {} L{} {}", Dim, tank.name, tank.finest, m.name);
     result.gate.push_back({key + " max particle speed", GateFigure::Kind::error, std::max(o.largest, 1e-12)});
     const bool grows = !(o.rate - 2.0 * o.rate_error <= 0.0);
-    if (m.paper || m.everywhere || m.tent) {
+    if (m.paper || m.everywhere || m.tent || m.ppe_degree > 0) {
       if (grows || o.largest > 1e-6)
         result.warnings.push_back(fmt::format(
             "{}: {} lets the still pool move: |v_p| up to {:.2e} sqrt(gH), growing at {:.3f} / s (doubling "
             "every {:.2f} s)",
             key,
-            m.paper        ? "the paper's preset"
-            : m.everywhere ? "the RBF transfer everywhere"
-                           : "APIC in uniform patches with tents at level changes",
+            m.paper            ? "the paper's preset"
+            : m.everywhere     ? "the RBF transfer everywhere"
+            : m.ppe_degree > 0 ? "degree-3 RBF-FD rows"
+                               : "APIC in uniform patches with tents at level changes",
             o.largest, o.rate, doubling));
       continue;
     }
@@ -171,19 +175,20 @@ CaseResult run(const CaseOptions& options) {
   Table series("over time", {"dim", "tank", "finest", "method", "t", "max |v_p| / sqrt(gH)"});
   std::vector<FlowMethod> methods = chosen_methods(kMethods, options.methods);
   if (!options.full && options.methods.empty())  // the quick tier leaves the full tier's comparison row out
-    std::erase_if(methods, [](const FlowMethod& m) { return m.everywhere || m.tent; });
+    std::erase_if(methods, [](const FlowMethod& m) { return m.everywhere || m.tent || m.ppe_degree > 0; });
   const LevelRange levels = options.levels.value_or(options.full ? LevelRange{4, 5} : LevelRange{4, 4});
   LIQUID_VERIFY(levels.first >= 3 && levels.last <= 6,
                 "pool-stability: --levels {}:{} is outside 3:6 (finest levels; the interior is two coarser)",
                 levels.first, levels.last);
+  const double end = options.duration.value_or(options.full ? 30.0 : 6.0);
   for (int finest = levels.first; finest <= levels.last; ++finest) {
     if (!options.full) {
-      study<3>({"cube", 1.0, finest, 6.0}, methods, table, series, result);
+      study<3>({"cube", 1.0, finest, end}, methods, table, series, result);
       continue;
     }
-    study<2>({"square", 1.0, finest, 30.0}, methods, table, series, result);
-    study<3>({"cube", 1.0, finest, 30.0}, methods, table, series, result);
-    study<3>({"2:1:1", 2.0, finest, 30.0}, methods, table, series, result);
+    study<2>({"square", 1.0, finest, end}, methods, table, series, result);
+    study<3>({"cube", 1.0, finest, end}, methods, table, series, result);
+    study<3>({"2:1:1", 2.0, finest, end}, methods, table, series, result);
   }
   result.tables.push_back(std::move(table));
   result.tables.push_back(std::move(series));
@@ -198,6 +203,6 @@ LIQUID_VERIFICATION_CASE(
      "spurious speed and its exponential growth rate, default against the paper's preset",
      true,
      run,
-     {Option::levels, Option::methods}});
+     {Option::levels, Option::methods, Option::duration}});
 
 }  // namespace liquid::verification
