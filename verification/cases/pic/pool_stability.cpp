@@ -153,7 +153,7 @@ void study(const Tank& tank, const std::vector<FlowMethod>& methods, Table& tabl
             key,
             m.paper            ? "the paper's preset"
             : m.everywhere     ? "the RBF transfer everywhere"
-            : m.ppe_degree > 0 ? "degree-3 RBF-FD rows"
+            : m.ppe_degree > 0 ? "the PPE with degree-3 RBF-FD rows"
                                : "APIC in uniform patches with tents at level changes",
             o.largest, o.rate, doubling));
       continue;
