@@ -23,8 +23,8 @@ namespace liquid {
 namespace {
 
 const char* kMethodNames[] = {
-    "rbf", "mls", "linear", "pic", "apic", "rbf, own factors", "rbf, full condition estimate",
-                              "pic, gather", "apic, gather"};
+    "rbf",         "mls",         "linear", "pic", "apic", "rbf, own factors", "rbf, full condition estimate",
+    "pic, gather", "apic, gather"};
 
 template <int Dim>
 struct Scene {
@@ -153,8 +153,16 @@ void BM_Binning(benchmark::State& state) {
 
 BENCHMARK_TEMPLATE(BM_Binning, 2)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK_TEMPLATE(BM_Binning, 3)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK_TEMPLATE(BM_ToFaces, 2)->DenseRange(0, 4)->DenseRange(6, 8)->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK_TEMPLATE(BM_ToFaces, 3)->DenseRange(0, 4)->DenseRange(6, 8)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK_TEMPLATE(BM_ToFaces, 2)
+    ->DenseRange(0, 4)
+    ->DenseRange(6, 8)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+BENCHMARK_TEMPLATE(BM_ToFaces, 3)
+    ->DenseRange(0, 4)
+    ->DenseRange(6, 8)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 BENCHMARK_TEMPLATE(BM_ToParticles, 2)->DenseRange(0, 5)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK_TEMPLATE(BM_ToParticles, 3)->DenseRange(0, 5)->Unit(benchmark::kMillisecond)->UseRealTime();
 

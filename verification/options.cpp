@@ -167,7 +167,7 @@ CaseOptions case_options(const StudyFlags& f, const CaseInfo& info) {
                    Option::ring_cap,     Option::rows,       Option::nullspace,       Option::tolerance,
                    Option::algebraic,    Option::perturb,    Option::trees,           Option::methods,
                    Option::seed,         Option::particles,  Option::radius,          Option::aspect,
-                   Option::merge_wait, Option::duration})
+                   Option::merge_wait,   Option::duration})
     if (f.given(o) && !info.accepts_option(o)) refused.push_back(flag_of(o));
   if (!refused.empty()) {
     std::vector<std::string> accepted;

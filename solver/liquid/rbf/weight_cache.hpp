@@ -32,7 +32,7 @@ class WeightCache {
   long hits() const { return map_.hits(); }
   long misses() const { return map_.misses(); }
   long bypassed() const { return bypassed_.load(std::memory_order_relaxed); }  ///< off-quantum stencils
-  long flushes() const { return map_.flushes(); }                              ///< times its older half was dropped
+  long flushes() const { return map_.flushes(); }  ///< times its older half was dropped
   std::size_t size() const;
   void clear();
 

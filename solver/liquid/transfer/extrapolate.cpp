@@ -231,8 +231,8 @@ struct AxisFaces {
 }  // namespace
 
 template <int Dim>
-ExtrapolationReport extrapolate_lattice(const RegularLattice<Dim>& lattice, int layers, std::span<double> value,
-                                        std::span<std::uint8_t> known) {
+ExtrapolationReport extrapolate_lattice(const RegularLattice<Dim>& lattice, int layers,
+                                        std::span<double> value, std::span<std::uint8_t> known) {
   LIQUID_VERIFY(layers >= 0, "extrapolate_lattice: {} layers", layers);
   LIQUID_VERIFY(known.size() == value.size(), "extrapolate_lattice: {} values and {} flags", value.size(),
                 known.size());

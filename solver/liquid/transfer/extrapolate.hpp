@@ -32,7 +32,7 @@ ExtrapolationReport extrapolate_faces(const tree::CellGraph<Dim>& graph, int lay
 /// and report, the values equal up to the order of each mean's sum. The regular baselines' step
 /// uses it; its work per layer is the layer's faces, with no graph walks.
 template <int Dim>
-ExtrapolationReport extrapolate_lattice(const RegularLattice<Dim>& lattice, int layers, std::span<double> value,
-                                        std::span<std::uint8_t> known);
+ExtrapolationReport extrapolate_lattice(const RegularLattice<Dim>& lattice, int layers,
+                                        std::span<double> value, std::span<std::uint8_t> known);
 
 }  // namespace liquid::transfer

@@ -155,8 +155,9 @@ template <int Dim>
 TransferReport linear_to_faces(const tree::CellGraph<Dim>& graph, const RegularLattice<Dim>& lattice,
                                const particles::Particles<Dim>& particles, const particles::CellBins& bins,
                                RegularScheme scheme, std::span<const double> masses, FaceValues& out) {
-  LIQUID_VERIFY(bins.n_particles() == particles.size(), "linear_to_faces: bins hold {} particles, there are {}",
-                bins.n_particles(), particles.size());
+  LIQUID_VERIFY(bins.n_particles() == particles.size(),
+                "linear_to_faces: bins hold {} particles, there are {}", bins.n_particles(),
+                particles.size());
   LIQUID_VERIFY(masses.empty() || static_cast<int>(masses.size()) == particles.size(),
                 "linear_to_faces: {} masses for {} particles", masses.size(), particles.size());
   std::span<const double> affine;
@@ -262,8 +263,9 @@ TransferReport linear_to_faces(const tree::CellGraph<Dim>& graph, const RegularL
 
 template <int Dim>
 TransferReport linear_to_faces_gather(const tree::CellGraph<Dim>& graph, const RegularLattice<Dim>& lattice,
-                               const particles::Particles<Dim>& particles, const particles::CellBins& bins,
-                               RegularScheme scheme, std::span<const double> masses, FaceValues& out) {
+                                      const particles::Particles<Dim>& particles,
+                                      const particles::CellBins& bins, RegularScheme scheme,
+                                      std::span<const double> masses, FaceValues& out) {
   LIQUID_VERIFY(bins.n_particles() == particles.size(),
                 "linear_to_faces_gather: bins hold {} particles, there are {}", bins.n_particles(),
                 particles.size());
@@ -463,9 +465,9 @@ Eigen::Vector3d face_angular_momentum(const tree::CellGraph<Dim>& graph, const F
   template TransferReport linear_to_faces<D>(const tree::CellGraph<D>&, const RegularLattice<D>&,          \
                                              const particles::Particles<D>&, const particles::CellBins&,   \
                                              RegularScheme, std::span<const double>, FaceValues&);         \
-  template TransferReport linear_to_faces_gather<D>(const tree::CellGraph<D>&, const RegularLattice<D>&,   \
-                                                    const particles::Particles<D>&, const particles::CellBins&, \
-                                                    RegularScheme, std::span<const double>, FaceValues&);  \
+  template TransferReport linear_to_faces_gather<D>(                                                       \
+      const tree::CellGraph<D>&, const RegularLattice<D>&, const particles::Particles<D>&,                 \
+      const particles::CellBins&, RegularScheme, std::span<const double>, FaceValues&);                    \
   template TransferReport linear_to_points<D>(const RegularLattice<D>&, std::span<const double>,           \
                                               std::span<const Vec<D>>, std::span<Vec<D>>,                  \
                                               std::span<double>);                                          \

@@ -64,7 +64,7 @@ class FaceVelocityField {
   std::vector<std::int32_t> slot_;  // per cell id: index into prepared_, or -1
   std::vector<std::unique_ptr<CellInterpolants>> prepared_;
   std::unique_ptr<rbf::InterpolantCache<Dim>> own_cache_;  // shared factors (options.share_factors)
-  rbf::InterpolantCache<Dim>* cache_ = nullptr;             // own_cache_, the caller's, or none
+  rbf::InterpolantCache<Dim>* cache_ = nullptr;            // own_cache_, the caller's, or none
 };
 
 extern template class FaceVelocityField<2>;

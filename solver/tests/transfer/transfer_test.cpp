@@ -168,7 +168,8 @@ TYPED_TEST(TransferTest, RegularScatterMatchesTheGatherOnAnyThreadCount) {
           transfer::linear_to_faces_gather<Dim>(g, lattice, p, bins, scheme, masses, gathered);
       const int threads = omp_get_max_threads();
       omp_set_num_threads(1);
-      const transfer::TransferReport r1 = transfer::linear_to_faces<Dim>(g, lattice, p, bins, scheme, masses, one);
+      const transfer::TransferReport r1 =
+          transfer::linear_to_faces<Dim>(g, lattice, p, bins, scheme, masses, one);
       omp_set_num_threads(std::max(2, threads));
       transfer::linear_to_faces<Dim>(g, lattice, p, bins, scheme, masses, two);
       omp_set_num_threads(threads);
@@ -438,7 +439,8 @@ TYPED_TEST(TransferTest, LatticeExtrapolationMatchesTheDefinitionOnAnyThreadCoun
         transfer::extrapolate_lattice<Dim>(lattice, layers, v3, k3);
         omp_set_num_threads(threads);
         const std::vector<long> counts = extrapolate_by_definition<Dim>(g, layers, v2, k2);
-        EXPECT_EQ(r.filled, counts) << "level " << level << ", " << layers << " layers, known inside " << inside;
+        EXPECT_EQ(r.filled, counts) << "level " << level << ", " << layers << " layers, known inside "
+                                    << inside;
         long unknown = 0, differ = 0;
         double worst = 0.0;
         g.for_each_face([&](tree::FaceId f) {
