@@ -151,18 +151,32 @@ Vec<Dim> multilinear_gradient(const Vec<Dim>& t, const std::array<bool, Dim>& cl
   return g;
 }
 
+namespace {
+
+/// The particle -> face transfers' checks and set-up: the bins and masses match the particles;
+/// `out` is reset. Returns APIC's affine field (empty for PIC).
+template <int Dim>
+std::span<const double> p2g_inputs(const char* name, const tree::CellGraph<Dim>& graph,
+                                   const particles::Particles<Dim>& particles,
+                                   const particles::CellBins& bins, RegularScheme scheme,
+                                   std::span<const double> masses, FaceValues& out) {
+  LIQUID_VERIFY(bins.n_particles() == particles.size(), "{}: bins hold {} particles, there are {}", name,
+                bins.n_particles(), particles.size());
+  LIQUID_VERIFY(masses.empty() || static_cast<int>(masses.size()) == particles.size(),
+                "{}: {} masses for {} particles", name, masses.size(), particles.size());
+  out.reset(graph.face_capacity());
+  if (scheme == RegularScheme::apic) return particles.field(particles.field_index("apic"));
+  return {};
+}
+
+}  // namespace
+
 template <int Dim>
 TransferReport linear_to_faces(const tree::CellGraph<Dim>& graph, const RegularLattice<Dim>& lattice,
                                const particles::Particles<Dim>& particles, const particles::CellBins& bins,
                                RegularScheme scheme, std::span<const double> masses, FaceValues& out) {
-  LIQUID_VERIFY(bins.n_particles() == particles.size(),
-                "linear_to_faces: bins hold {} particles, there are {}", bins.n_particles(),
-                particles.size());
-  LIQUID_VERIFY(masses.empty() || static_cast<int>(masses.size()) == particles.size(),
-                "linear_to_faces: {} masses for {} particles", masses.size(), particles.size());
-  std::span<const double> affine;
-  if (scheme == RegularScheme::apic) affine = particles.field(particles.field_index("apic"));
-  out.reset(graph.face_capacity());
+  const std::span<const double> affine =
+      p2g_inputs<Dim>("linear_to_faces", graph, particles, bins, scheme, masses, out);
   // A scatter: each particle is read once and adds its weight and momentum to the 2^Dim lattice
   // faces of each component. A particle in lattice cell z (along the slowest axis, Dim - 1) reaches
   // faces z - 1 .. z + 1 there, so slabs two cells thick that are two slabs apart never share a
@@ -266,14 +280,8 @@ TransferReport linear_to_faces_gather(const tree::CellGraph<Dim>& graph, const R
                                       const particles::Particles<Dim>& particles,
                                       const particles::CellBins& bins, RegularScheme scheme,
                                       std::span<const double> masses, FaceValues& out) {
-  LIQUID_VERIFY(bins.n_particles() == particles.size(),
-                "linear_to_faces_gather: bins hold {} particles, there are {}", bins.n_particles(),
-                particles.size());
-  LIQUID_VERIFY(masses.empty() || static_cast<int>(masses.size()) == particles.size(),
-                "linear_to_faces_gather: {} masses for {} particles", masses.size(), particles.size());
-  std::span<const double> affine;
-  if (scheme == RegularScheme::apic) affine = particles.field(particles.field_index("apic"));
-  out.reset(graph.face_capacity());
+  const std::span<const double> affine =
+      p2g_inputs<Dim>("linear_to_faces_gather", graph, particles, bins, scheme, masses, out);
   TransferReport total;
   // Each face gathers from the particles of the 2 x 3^(Dim-1) cells around it, so a particle is
   // visited 2 x 3^(Dim-1) times per axis: its stencil (base corner and fractions) is computed once

@@ -10,6 +10,9 @@
 #include <algorithm>
 #include <cmath>
 #include <random>
+#include <string>
+
+#include <fmt/format.h>
 
 #include "liquid/core/error.hpp"
 #include "liquid/particles/advect.hpp"
@@ -368,6 +371,28 @@ std::vector<long> extrapolate_by_definition(const tree::CellGraph<Dim>& g, int l
   return counts;
 }
 
+/// Compares an extrapolation's result (v1, k1, report r) with the definition's (v2, k2, counts):
+/// the same faces filled per layer and left unknown, the values to round-off (the sums run in
+/// another order). Returns the faces left unknown.
+template <int Dim>
+long expect_as_defined(const tree::CellGraph<Dim>& g, const transfer::ExtrapolationReport& r,
+                       const std::vector<double>& v1, const std::vector<std::uint8_t>& k1,
+                       const std::vector<double>& v2, const std::vector<std::uint8_t>& k2,
+                       const std::vector<long>& counts, const std::string& label) {
+  EXPECT_EQ(r.filled, counts) << label;
+  long unknown = 0, differ = 0;
+  double worst = 0.0;
+  g.for_each_face([&](tree::FaceId f) {
+    unknown += !k1[f];
+    differ += k1[f] != k2[f];
+    worst = std::max(worst, std::abs(v1[f] - v2[f]));
+  });
+  EXPECT_EQ(r.left_unknown, unknown) << label;
+  EXPECT_EQ(differ, 0) << label;
+  EXPECT_LT(worst, 1e-14) << label;
+  return unknown;
+}
+
 TYPED_TEST(TransferTest, ExtrapolationVisitsOnlyTheFrontYetMatchesTheDefinition) {
   constexpr int Dim = TypeParam::value;
   for (int jump : {1, 3}) {
@@ -390,19 +415,9 @@ TYPED_TEST(TransferTest, ExtrapolationVisitsOnlyTheFrontYetMatchesTheDefinition)
         std::vector<std::uint8_t> k1 = known, k2 = known;
         const transfer::ExtrapolationReport r = transfer::extrapolate_faces<Dim>(g, layers, v1, k1);
         const std::vector<long> counts = extrapolate_by_definition<Dim>(g, layers, v2, k2);
-        EXPECT_EQ(r.filled, counts) << "jump " << jump << ", " << layers << " layers, known inside "
-                                    << inside;
-        long unknown = 0, differ = 0;
-        double worst = 0.0;
-        g.for_each_face([&](tree::FaceId f) {
-          unknown += !k1[f];
-          differ += k1[f] != k2[f];
-          worst = std::max(worst, std::abs(v1[f] - v2[f]));
-        });
-        EXPECT_EQ(r.left_unknown, unknown);
-        EXPECT_EQ(differ, 0);
-        // Summation order differs from the definition's (sorted face ids): round-off only.
-        EXPECT_LT(worst, 1e-14);
+        const long unknown =
+            expect_as_defined<Dim>(g, r, v1, k1, v2, k2, counts,
+                                   fmt::format("jump {}, {} layers, known inside {}", jump, layers, inside));
         if (layers == 1000) {
           EXPECT_EQ(unknown, 0);
         }
@@ -439,18 +454,9 @@ TYPED_TEST(TransferTest, LatticeExtrapolationMatchesTheDefinitionOnAnyThreadCoun
         transfer::extrapolate_lattice<Dim>(lattice, layers, v3, k3);
         omp_set_num_threads(threads);
         const std::vector<long> counts = extrapolate_by_definition<Dim>(g, layers, v2, k2);
-        EXPECT_EQ(r.filled, counts) << "level " << level << ", " << layers << " layers, known inside "
-                                    << inside;
-        long unknown = 0, differ = 0;
-        double worst = 0.0;
-        g.for_each_face([&](tree::FaceId f) {
-          unknown += !k1[f];
-          differ += k1[f] != k2[f];
-          worst = std::max(worst, std::abs(v1[f] - v2[f]));
-        });
-        EXPECT_EQ(r.left_unknown, unknown);
-        EXPECT_EQ(differ, 0);
-        EXPECT_LT(worst, 1e-14);
+        const long unknown = expect_as_defined<Dim>(
+            g, r, v1, k1, v2, k2, counts,
+            fmt::format("level {}, {} layers, known inside {}", level, layers, inside));
         EXPECT_EQ(v1, v3);
         EXPECT_EQ(k1, k3);
         // Every face fills in the end when its axis has a known face to start from.
