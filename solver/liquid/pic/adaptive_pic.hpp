@@ -182,11 +182,14 @@ struct PicOptions {
     reseeding.keep = false;
     uniform_patches = false;
     refill_emptied = false;
+    poisson.rbf.degree = 2;
+    poisson.gradient_degree = 2;
   }
   /// True when the transfer and reseeding are the paper's preset (what apply_paper_preset() sets).
   bool paper_preset() const {
     return rbf.exponent == 5 && rbf.degree == 2 && reseeding.lo == (Dim == 2 ? 3 : 5) &&
-           reseeding.hi == (Dim == 2 ? 12 : 15) && !reseeding.keep && !uniform_patches && !refill_emptied;
+           reseeding.hi == (Dim == 2 ? 12 : 15) && !reseeding.keep && !uniform_patches && !refill_emptied &&
+           poisson.rbf.degree == 2 && poisson.gradient_degree == 2;
   }
   static Vec<Dim> default_gravity() {
     Vec<Dim> g = Vec<Dim>::Zero();
@@ -344,7 +347,7 @@ class AdaptivePic {
   mac::PoissonSystem<Dim> system_;
   /// The RBF-FD weights of the PPE rows and face gradients, kept across steps: a step's tree keeps
   /// most of the last step's T-junction layouts, and an entry is a function of its layout alone.
-  /// Emptied past 2^14 layouts (about 40 MB in 3D).
+  /// At most about 2^14 layouts (two generations; about 40 MB in 3D).
   std::unique_ptr<rbf::WeightCache<Dim>> weights_;
   std::unique_ptr<rbf::InterpolantCache<Dim>> interpolants_;  // the RBF transfer's factors, kept across steps
   // The PPE solver, kept across steps: an AMG solver keeps its hierarchy while the layout stays.

@@ -152,7 +152,7 @@ class ShapeMap {
   };
   /// One more young entry; the thread that fills the generation rotates every shard.
   void count_young() {
-    if (generation_ == 0 || young_.fetch_add(1, std::memory_order_relaxed) + 1 != generation_ + 1) return;
+    if (generation_ == 0 || young_.fetch_add(1, std::memory_order_relaxed) + 1 != generation_) return;
     for (int i = 0; i < n_shards; ++i) {
       std::unique_lock lock(shards_[i].mutex);
       shards_[i].old = std::move(shards_[i].young);

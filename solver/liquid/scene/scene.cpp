@@ -647,8 +647,9 @@ void read_pic_solver(const TableReader& r, Scene<Dim>& s) {
                 r.where("transfer_exponent"), o.rbf.exponent);
   o.rbf.degree = static_cast<int>(r.integer_in("transfer_degree", 0, 4, o.rbf.degree));
   // The RBF-FD rows' and face gradients' polynomial degree at T-junctions (the PPE and projection).
-  o.poisson.rbf.degree = static_cast<int>(r.integer_in("ppe_degree", 1, 4, o.poisson.rbf.degree));
-  o.poisson.gradient_degree = o.poisson.rbf.degree;
+  // Degree 2 is the least that reproduces quadratics, which a consistent Laplacian row needs.
+  if (r.has("ppe_degree"))
+    o.poisson.rbf.degree = o.poisson.gradient_degree = static_cast<int>(r.integer_in("ppe_degree", 2, 4));
   if (r.has("patch_transfer")) o.uniform_patches = r.choice("patch_transfer", {"apic", "rbf"}) == "apic";
   o.tent_at_level_changes = r.choice("level_change_p2g", {"rbf", "tent"}, std::string("rbf")) == "tent";
   LIQUID_VERIFY(!o.tent_at_level_changes || o.uniform_patches,

@@ -151,10 +151,10 @@ void study(const Tank& tank, const std::vector<FlowMethod>& methods, Table& tabl
             "{}: {} lets the still pool move: |v_p| up to {:.2e} sqrt(gH), growing at {:.3f} / s (doubling "
             "every {:.2f} s)",
             key,
-            m.paper            ? "the paper's preset"
-            : m.everywhere     ? "the RBF transfer everywhere"
-            : m.ppe_degree > 0 ? "the PPE with degree-3 RBF-FD rows"
-                               : "APIC in uniform patches with tents at level changes",
+            m.paper            ? std::string("the paper's preset")
+            : m.everywhere     ? std::string("the RBF transfer everywhere")
+            : m.ppe_degree > 0 ? fmt::format("the PPE with degree-{} RBF-FD rows", m.ppe_degree)
+                               : std::string("APIC in uniform patches with tents at level changes"),
             o.largest, o.rate, doubling));
       continue;
     }
