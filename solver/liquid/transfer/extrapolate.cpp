@@ -198,8 +198,7 @@ struct LatticeNeighbourhood {
   }
 };
 
-/// Faces of one axis in lattice order, with the flat index of each neighbour (-1 where it leaves
-/// the lattice).
+/// Faces of one axis in lattice order: the flat indices of a face's neighbours inside the lattice.
 template <int Dim>
 struct AxisFaces {
   IVec<Dim> extent;
@@ -242,8 +241,7 @@ ExtrapolationReport extrapolate_lattice(const RegularLattice<Dim>& lattice, int 
   long unknown_count = 0;
   for (int k = 0; k < Dim; ++k) {
     const AxisFaces<Dim> axis(lattice, k);
-    long n = 1;
-    for (int j = 0; j < Dim; ++j) n *= axis.extent[j];
+    const long n = lattice.face_count(k);
     // This axis' flags and values in lattice order, so neighbours are strided reads.
     std::vector<std::uint8_t> kn(static_cast<std::size_t>(n));
     std::vector<double> val(static_cast<std::size_t>(n));

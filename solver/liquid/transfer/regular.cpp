@@ -185,13 +185,10 @@ TransferReport linear_to_faces(const tree::CellGraph<Dim>& graph, const RegularL
   // on any thread count.
   constexpr int top = Dim - 1;
   const long n = lattice.n();
-  std::array<long, Dim> n_faces{};
   std::array<std::vector<double>, Dim> sum, mass;
   for (int k = 0; k < Dim; ++k) {
-    n_faces[k] = 1;
-    for (int j = 0; j < Dim; ++j) n_faces[k] *= lattice.extent(k, j);
-    sum[k].assign(n_faces[k], 0.0);
-    mass[k].assign(n_faces[k], 0.0);
+    sum[k].assign(lattice.face_count(k), 0.0);
+    mass[k].assign(lattice.face_count(k), 0.0);
   }
   long cells_per_layer = 1;
   for (int j = 0; j < top; ++j) cells_per_layer *= n;
@@ -258,19 +255,21 @@ TransferReport linear_to_faces(const tree::CellGraph<Dim>& graph, const RegularL
   for (std::int32_t p : strays) add(p);
 
   TransferReport total;
-  for (int k = 0; k < Dim; ++k) {
-    total.targets += n_faces[k];
-    for (long flat = 0; flat < n_faces[k]; ++flat) {
-      const tree::FaceId f = lattice.face_at(k, flat);
-      if (mass[k][flat] > 0.0) {
-        out.value[f] = sum[k][flat] / mass[k][flat];
-        out.known[f] = 1;
-        out.weight[f] = mass[k][flat];
-      } else {
-        ++total.empty;
-      }
-    }
-  }
+  for (int k = 0; k < Dim; ++k)
+    parallel_for(
+        lattice.face_count(k), [] { return TransferReport{}; },
+        [&](TransferReport& r, long flat) {
+          ++r.targets;
+          if (!(mass[k][flat] > 0.0)) {
+            ++r.empty;
+            return;
+          }
+          const tree::FaceId f = lattice.face_at(k, flat);
+          out.value[f] = sum[k][flat] / mass[k][flat];
+          out.known[f] = 1;
+          out.weight[f] = mass[k][flat];
+        },
+        [&](TransferReport& r) { total += r; }, 4096);
   total.max_degree_used = 1;
   return total;
 }

@@ -55,6 +55,8 @@ class RegularLattice {
   long flat_face(int k, const IVec<Dim>& a) const;
   /// The axis-k face of flat index `flat`.
   tree::FaceId face_at(int k, long flat) const { return faces_[k][flat]; }
+  /// Number of axis-k lattice faces (the product of extent(k, j) over j).
+  long face_count(int k) const { return static_cast<long>(faces_[k].size()); }
 
  private:
   long flat_cell(const IVec<Dim>& a) const;

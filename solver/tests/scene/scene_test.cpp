@@ -134,6 +134,16 @@ TEST(Scene, ValuesAndOverridesReachTheSolverOptions) {
     EXPECT_FALSE(own.pic.rbf.share_factors);
     EXPECT_EQ(own.pic.poisson.rbf.degree, 3);  // ppe_degree: the RBF-FD rows and the face gradients
     EXPECT_EQ(own.pic.poisson.gradient_degree, 3);
+    // The paper's preset (liquid run --paper, applied after the scene's keys) restores its degree 2,
+    // and a PPE of another degree is not the paper's.
+    pic::PicOptions<2> paper = own.pic;
+    EXPECT_FALSE(paper.paper_preset());
+    paper.apply_paper_preset();
+    EXPECT_TRUE(paper.paper_preset());
+    EXPECT_EQ(paper.poisson.rbf.degree, 2);
+    EXPECT_EQ(paper.poisson.gradient_degree, 2);
+    paper.poisson.gradient_degree = 3;
+    EXPECT_FALSE(paper.paper_preset());
     EXPECT_EQ(own.pic.rbf.condition_estimate, rbf::ConditionEstimate::hager_higham);
     EXPECT_EQ(own.pic.poisson.nullspace, mac::Nullspace::pin);
     EXPECT_EQ(own.pic.rbf.exponent, 3);

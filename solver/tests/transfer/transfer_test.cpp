@@ -602,6 +602,20 @@ TYPED_TEST(TransferTest, SharedFactorsAgreeWithEachCellsOwn) {
   EXPECT_GT(largest, 0.5);
   EXPECT_LT(worst, 1e-11);
   EXPECT_LT(worst_field, 1e-11);
+
+  // A cache kept by the caller (the PIC step keeps one across steps): a second field on the same
+  // tree makes no new factorisation, and both give the own-cache field's values bit for bit.
+  rbf::InterpolantCache<Dim> kept;
+  const transfer::FaceVelocityField<Dim> first(g, u, known, shared, {}, nullptr, &kept);
+  const long made = kept.misses();
+  EXPECT_GT(made, 0);
+  const transfer::FaceVelocityField<Dim> second(g, u, known, shared, {}, nullptr, &kept);
+  EXPECT_EQ(kept.misses(), made);
+  EXPECT_GT(kept.hits(), 0);
+  for (int i = 0; i < p.size(); ++i) {
+    ASSERT_EQ(first(p.x[i]), fa(p.x[i])) << "particle " << i;
+    ASSERT_EQ(second(p.x[i]), fa(p.x[i])) << "particle " << i;
+  }
 }
 
 TYPED_TEST(TransferTest, AdvectionThroughFaceVelocitiesIsExactForLinearFields) {
