@@ -9,6 +9,7 @@
 #include <limits>
 #include <map>
 #include <regex>
+#include <sstream>
 
 #include <fmt/format.h>
 
@@ -85,6 +86,29 @@ LevelRange parse_level_range(const std::string& text, const std::string& flag) {
   return r;
 }
 
+SizeList parse_size_list(const std::string& text, const std::string& flag) {
+  static const std::regex pattern(R"(^\s*([23])\s*:\s*(\d+(\s*,\s*\d+)*)\s*$)");
+  std::smatch m;
+  LIQUID_VERIFY(std::regex_match(text, m, pattern),
+                "{} expects D:N[,N...] with D = 2 or 3 and whole divisions N (e.g. 3:48,64), got '{}'", flag,
+                text);
+  SizeList sizes;
+  sizes.dim = m.str(1) == "2" ? 2 : 3;
+  std::stringstream list(m.str(2));
+  for (std::string part; std::getline(list, part, ',');) {
+    part.erase(0, part.find_first_not_of(' '));
+    part.erase(part.find_last_not_of(' ') + 1);
+    int n = 0;
+    const auto [end, ec] = std::from_chars(part.data(), part.data() + part.size(), n);
+    LIQUID_VERIFY(ec == std::errc() && end == part.data() + part.size() && n >= 4 && n <= 1000,
+                  "{} {}: the division {} is out of range (4 to 1000: spacings a/4 to a/1000)", flag, text, part);
+    LIQUID_VERIFY(sizes.divisions.empty() || n > sizes.divisions.back(),
+                  "{} {}: the divisions must increase (finer sizes last)", flag, text);
+    sizes.divisions.push_back(n);
+  }
+  return sizes;
+}
+
 long default_max_cells() {
   const long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGE_SIZE);
   if (pages <= 0 || page <= 0) return 4'000'000;
@@ -156,6 +180,9 @@ void add_study_flags(CLI::App& app, StudyFlags& f) {
                  "pool-stability: simulated seconds of every row (0.1 to 3600; default 6, full tier 30)")
       ->check(finite_number)
       ->check(CLI::Range(0.1, 3600.0));
+  app.add_option("--sizes", f.sizes,
+                 "sph-gain-scaling: one dimension and its spacings a/N, as D:N[,N...] (e.g. 3:48; N from 4 to "
+                 "1000, increasing)");
   app.add_option("--max-cells", f.max_cells, kMaxCellsHelp)->check(CLI::Range(1L, 1'000'000'000'000L));
   app.add_flag("--full", f.full, "use the full suite's extent");
 }
@@ -167,7 +194,7 @@ CaseOptions case_options(const StudyFlags& f, const CaseInfo& info) {
                    Option::ring_cap,     Option::rows,       Option::nullspace,       Option::tolerance,
                    Option::algebraic,    Option::perturb,    Option::trees,           Option::methods,
                    Option::seed,         Option::particles,  Option::radius,          Option::aspect,
-                   Option::merge_wait,   Option::duration})
+                   Option::merge_wait,   Option::duration, Option::sizes})
     if (f.given(o) && !info.accepts_option(o)) refused.push_back(flag_of(o));
   if (!refused.empty()) {
     std::vector<std::string> accepted;
@@ -222,6 +249,7 @@ CaseOptions case_options(const StudyFlags& f, const CaseInfo& info) {
   if (f.given(Option::aspect)) o.aspect = f.aspect;
   if (f.given(Option::merge_wait)) o.merge_wait = f.merge_wait;
   if (f.given(Option::duration)) o.duration = f.duration;
+  if (f.given(Option::sizes)) o.sizes = parse_size_list(f.sizes, "--sizes");
   o.max_cells = f.max_cells;
   o.full = f.full;
   return o;
@@ -254,6 +282,7 @@ std::string echo(const std::string& case_name, const StudyFlags& f) {
   s += show(Option::aspect, fmt::format("{:g}", f.aspect));
   s += show(Option::merge_wait, std::to_string(f.merge_wait));
   s += show(Option::duration, fmt::format("{:g}", f.duration));
+  s += show(Option::sizes, f.sizes);
   s += fmt::format(" --max-cells {} --tier {}", f.max_cells, f.full ? "full" : "quick");
   return s;
 }

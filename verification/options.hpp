@@ -34,6 +34,7 @@ struct StudyFlags {
   double radius = 0.0, aspect = 1.0;
   int merge_wait = 0;
   double duration = 0.0;
+  std::string sizes;
   long max_cells = 0;
   bool full = false;
 
@@ -54,6 +55,10 @@ void add_user_poisson_flags(CLI::App& app, UserPoissonArgs& args);
 /// The default budget of cells for one row: half the machine's memory at kCellBytes a cell (a study
 /// counts each unknown as kUnknownCells<Dim> cells more).
 long default_max_cells();
+
+/// "D:N[,N...]": dimension 2 or 3 and divisions 4 to 1000, increasing; throws liquid::Error naming
+/// `flag`.
+SizeList parse_size_list(const std::string& text, const std::string& flag);
 
 /// "A:B" with integers 0 <= A <= B <= 64; throws liquid::Error naming `flag`.
 LevelRange parse_level_range(const std::string& text, const std::string& flag);

@@ -55,6 +55,8 @@ const char* flag_of(Option option) {
       return "--merge-wait";
     case Option::duration:
       return "--duration";
+    case Option::sizes:
+      return "--sizes";
   }
   return "?";
 }

@@ -41,11 +41,18 @@ enum class Option {
   radius,
   aspect,
   merge_wait,
-  duration
+  duration,
+  sizes
 };
 using OptionSet = std::vector<Option>;
 /// The command-line flag of an option ("--max-jump").
 const char* flag_of(Option option);
+
+/// `--sizes D:N[,N...]`: one dimension and the divisions (spacings a/N) a size study runs.
+struct SizeList {
+  int dim = 0;
+  std::vector<int> divisions;
+};
 
 /// How the later rows of a convergence study get their trees.
 enum class RowProtocol {
@@ -106,6 +113,7 @@ struct CaseOptions {
   std::optional<double> aspect;               ///< --aspect A: a sampled box's width over its height
   std::optional<int> merge_wait;              ///< --merge-wait N: SPH, passes before a split's children merge
   std::optional<double> duration;             ///< --duration T: simulated seconds of a long run
+  std::optional<SizeList> sizes;              ///< --sizes D:N,N: a size study's dimension and divisions
   long max_cells = 0;                         ///< budget: refuse rows above this many cells (0: no limit)
   bool full = false;                          ///< the full suite's extent rather than the quick one
 };

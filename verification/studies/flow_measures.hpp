@@ -21,6 +21,7 @@ struct FlowMethod {
   bool everywhere = false;  ///< adaptive RBF with the RBF everywhere (no uniform patches)
   bool tent = false;        ///< adaptive RBF with tent particle -> face at level changes
   int ppe_degree = 0;       ///< adaptive RBF: the RBF-FD rows' polynomial degree (0: the default)
+  bool flux_rows = false;   ///< adaptive RBF: flux rows at T-junctions (PPE = D G, mac::IrregularRows)
 };
 /// The methods of `all` that --methods names, in the order named (every one when none is named);
 /// throws naming a method that is not one of them.

@@ -58,6 +58,49 @@ std::vector<double> face_normal_derivative(const tree::CellGraph<Dim>& graph, co
   return out;
 }
 
+template <int Dim>
+bool face_gradient_weights(const tree::CellGraph<Dim>& graph, const DofLayout<Dim>& layout,
+                           const Boundary<Dim>& boundary, const PoissonOptions& options, tree::FaceId f,
+                           rbf::WeightCache<Dim>* cache, RowScratch<Dim>& scratch,
+                           std::vector<FaceGradientTerm<Dim>>& terms, rbf::Status* status) {
+  terms.clear();
+  const tree::GraphFace& g = graph.face(f);
+  if (g.is_boundary()) return false;
+  const int ia = layout.dof_of_cell[g.cell[0]], ib = layout.dof_of_cell[g.cell[1]];
+  if (ia < 0 && ib < 0) return false;
+  if ((ia < 0 || ib < 0) && !boundary.air_cells()) return false;
+  if (!g.hanging() && g.side_level[0] == g.side_level[1]) {
+    const double w = 1.0 / graph.cell_size(g.cell[0])[g.axis];
+    terms.push_back({ia, -w, ia >= 0 ? 0.0 : boundary.dirichlet(graph.centre(g.cell[0]))});
+    terms.push_back({ib, w, ib >= 0 ? 0.0 : boundary.dirichlet(graph.centre(g.cell[1]))});
+    return true;
+  }
+  rbf::Config config = options.rbf;
+  config.degree = options.gradient_degree;
+  const int n_target = stencil_size(Dim, config.degree, options.growth);
+  const Vec<Dim> at = graph.face_centre(f);
+  const tree::CellId seeds[2] = {g.cell[0], g.cell[1]};
+  auto& nodes = scratch.nodes;
+  gather_stencil<Dim>(graph, layout, boundary, seeds, at, options.rule, n_target, options.node_cap(n_target),
+                      nodes);
+  const rbf::Status st =
+      stencil_weights<Dim>(nodes, at, rbf::Operator<Dim>::partial(g.axis), config, scratch.w, scratch.n_retried,
+                           cache_for<Dim>(nodes, boundary, options.cache_weights ? cache : nullptr),
+                           std::min(graph.cell_size(g.cell[0])[0], graph.cell_size(g.cell[1])[0]));
+  LIQUID_VERIFY(st.usable(), "face {} between cells {} and {}: RBF-FD gradient weights unusable: {}", f,
+                g.cell[0], g.cell[1], st.describe());
+  if (status) *status = st;
+  for (std::size_t j = 0; j < nodes.size(); ++j) terms.push_back({nodes[j].dof, scratch.w[j], nodes[j].value});
+  return true;
+}
+
+template bool face_gradient_weights<2>(const tree::CellGraph<2>&, const DofLayout<2>&, const Boundary<2>&,
+                                       const PoissonOptions&, tree::FaceId, rbf::WeightCache<2>*,
+                                       RowScratch<2>&, std::vector<FaceGradientTerm<2>>&, rbf::Status*);
+template bool face_gradient_weights<3>(const tree::CellGraph<3>&, const DofLayout<3>&, const Boundary<3>&,
+                                       const PoissonOptions&, tree::FaceId, rbf::WeightCache<3>*,
+                                       RowScratch<3>&, std::vector<FaceGradientTerm<3>>&, rbf::Status*);
+
 template std::vector<double> face_normal_derivative<2>(const tree::CellGraph<2>&, const DofLayout<2>&,
                                                        const Boundary<2>&, const PoissonOptions&,
                                                        const linalg::Vector&, rbf::WeightCache<2>*);

@@ -22,4 +22,20 @@ std::vector<double> face_normal_derivative(const tree::CellGraph<Dim>& graph, co
                                            const Boundary<Dim>& boundary, const PoissonOptions& options,
                                            const linalg::Vector& p, rbf::WeightCache<Dim>* cache = nullptr);
 
+/// The same face gradient as weights: d/dx_axis at face f from g.cell[0] towards g.cell[1] is
+/// sum_j w_j (p[dof_j] + value_j) over `terms` (dof -1: a known value alone). Returns false where
+/// face_normal_derivative gives NaN (a boundary face, no unknown side, or a level-set problem's
+/// face towards a cell outside, whose gradient the caller forms). The flux rows of the PPE use it,
+/// so that their D G is the projection's. Throws liquid::Error as face_normal_derivative does.
+template <int Dim>
+struct FaceGradientTerm {
+  int dof = -1;
+  double weight = 0.0, value = 0.0;
+};
+template <int Dim>
+bool face_gradient_weights(const tree::CellGraph<Dim>& graph, const DofLayout<Dim>& layout,
+                           const Boundary<Dim>& boundary, const PoissonOptions& options, tree::FaceId f,
+                           rbf::WeightCache<Dim>* cache, RowScratch<Dim>& scratch,
+                           std::vector<FaceGradientTerm<Dim>>& terms, rbf::Status* status = nullptr);
+
 }  // namespace liquid::mac

@@ -1,10 +1,12 @@
 #include "liquid/mac/laplacian.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include <fmt/format.h>
 
 #include "liquid/core/error.hpp"
+#include "liquid/mac/gradient.hpp"
 
 namespace liquid::mac {
 
@@ -135,12 +137,95 @@ RowKind rbf_row(const tree::CellGraph<Dim>& graph, const DofLayout<Dim>& layout,
   return RowKind::rbf;
 }
 
+const char* to_string(IrregularRows rows) {
+  return rows == IrregularRows::flux ? "flux" : "laplacian";
+}
+
+IrregularRows parse_irregular_rows(const std::string& name) {
+  if (name == "laplacian") return IrregularRows::laplacian;
+  if (name == "flux") return IrregularRows::flux;
+  throw Error(fmt::format("unknown irregular row kind '{}' (laplacian or flux)", name));
+}
+
+template <int Dim>
+RowKind flux_row(const tree::CellGraph<Dim>& graph, const DofLayout<Dim>& layout, const Boundary<Dim>& boundary,
+                 tree::CellId c, const PoissonOptions& options, rbf::WeightCache<Dim>* cache,
+                 RowScratch<Dim>& scratch, Row& row, rbf::Status& status, std::span<const double> coefficient) {
+  const int i = layout.dof_of_cell[c];
+  const Vec<Dim> x = graph.centre(c);
+  const Vec<Dim> h = graph.cell_size(c);
+  const double volume = graph.volume(c);
+  thread_local std::vector<FaceGradientTerm<Dim>> terms;
+  RowKind kind = RowKind::fd;
+  double diag = 0.0;
+  for (int k = 0; k < Dim; ++k)
+    for (int dir : {-1, 1})
+      graph.for_each_side_face(c, k, dir, [&](const tree::SideFace& sf) {
+        const double a = graph.face_area(sf.face) / volume;
+        const bool wall = sf.adjacency == tree::Adjacency::boundary;
+        const double beta = coefficient.empty() || (wall && !boundary.dirichlet_walls) ? 1.0 : coefficient[sf.face];
+        // Each face adds -a beta dp/dn (outward) to the row: unknowns to the entries, known parts to rhs.
+        if (wall) {
+          const Vec<Dim> w = graph.face_centre(sf.face);
+          if (!boundary.dirichlet_walls) {
+            row.rhs += a * boundary.flux(w, k, dir);
+            return;
+          }
+          const double g = a * beta * 2.0 / h[k];  // dp/dn = (p_wall - p_c) / (h / 2)
+          diag += g;
+          row.rhs += g * boundary.dirichlet(w);
+          return;
+        }
+        const int j = layout.dof_of_cell[sf.neighbour];
+        if (j < 0 && !boundary.air_cells()) {
+          // Ghost fluid towards the crossing, as the projection forms this face's gradient.
+          const Vec<Dim> y = graph.centre(sf.neighbour);
+          const auto cut =
+              levelset::crossing<Dim>(boundary.levelset, x, y, boundary.levelset(x), boundary.levelset(y));
+          LIQUID_VERIFY(cut.has_value(), "cell {}: no interface crossing towards outside neighbour {}", c,
+                        sf.neighbour);
+          const double g = a * beta / (std::max(cut->theta, 1e-3) * std::abs(y[k] - x[k]));
+          diag += g;
+          row.rhs += g * boundary.dirichlet(cut->point);
+          return;
+        }
+        rbf::Status st;
+        st.degree_used = options.gradient_degree;
+        const bool any = face_gradient_weights<Dim>(graph, layout, boundary, options, sf.face, cache, scratch,
+                                                    terms, &st);
+        LIQUID_VERIFY(any, "cell {}: face {} has no gradient", c, sf.face);
+        if (terms.size() > 2) {
+          kind = RowKind::rbf;
+          if (st.condition > status.condition || st.degree_used < status.degree_used ||
+              status.n_nodes == 0)
+            status = st;
+        }
+        const double scale = dir * a * beta;  // outward = dir x (d/dx_axis)
+        for (const FaceGradientTerm<Dim>& t : terms) {
+          const double w = scale * t.weight;
+          if (t.dof == i)
+            diag -= w;
+          else if (t.dof >= 0)
+            row.entries.emplace_back(t.dof, -w);
+          row.rhs += w * t.value;
+        }
+      });
+  row.entries.emplace_back(i, diag);
+  return kind;
+}
+
 template bool regular_neighbourhood<2>(const tree::CellGraph<2>&, tree::CellId);
 template bool regular_neighbourhood<3>(const tree::CellGraph<3>&, tree::CellId);
 template RowKind fd_row<2>(const tree::CellGraph<2>&, const DofLayout<2>&, const Boundary<2>&, tree::CellId,
                            Row&, std::span<const double>);
 template RowKind fd_row<3>(const tree::CellGraph<3>&, const DofLayout<3>&, const Boundary<3>&, tree::CellId,
                            Row&, std::span<const double>);
+template RowKind flux_row<2>(const tree::CellGraph<2>&, const DofLayout<2>&, const Boundary<2>&, tree::CellId,
+                             const PoissonOptions&, rbf::WeightCache<2>*, RowScratch<2>&, Row&, rbf::Status&,
+                             std::span<const double>);
+template RowKind flux_row<3>(const tree::CellGraph<3>&, const DofLayout<3>&, const Boundary<3>&, tree::CellId,
+                             const PoissonOptions&, rbf::WeightCache<3>*, RowScratch<3>&, Row&, rbf::Status&,
+                             std::span<const double>);
 template RowKind rbf_row<2>(const tree::CellGraph<2>&, const DofLayout<2>&, const Boundary<2>&, tree::CellId,
                             const PoissonOptions&, rbf::WeightCache<2>*, RowScratch<2>&, Row&, rbf::Status&);
 template RowKind rbf_row<3>(const tree::CellGraph<3>&, const DofLayout<3>&, const Boundary<3>&, tree::CellId,

@@ -5,6 +5,7 @@
 // cell centres otherwise. One row at a time, over plain data; the driver (assemble_poisson) loops.
 
 #include <span>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -18,6 +19,18 @@
 namespace liquid::mac {
 
 enum class Nullspace { pin, zero_mean };
+
+/// The rows of cells whose neighbourhood is not regular (T-junctions, level jumps):
+///   - laplacian: RBF-FD of -Lap p at the cell centre (the paper's, Sec. 4.3);
+///   - flux: the finite-volume sum of the projection's own face gradients, -(1/V) sum_f area_f dp/dn_f
+///     (two-point at equal faces, RBF-FD at hanging ones, face_normal_derivative's weights), so that
+///     the PPE is exactly the divergence of the gradient the projection subtracts: the projected
+///     velocity's divergence is the solver's residual alone, and a repeated projection changes nothing.
+///     Every row is then such a sum: in the interior of a regular neighbourhood it is the FD row, and
+///     next to a level-set crossing the ghost-fluid flux form (the FD rows use Shortley-Weller there).
+enum class IrregularRows { laplacian, flux };
+const char* to_string(IrregularRows rows);
+IrregularRows parse_irregular_rows(const std::string& name);
 
 // Polynomial degrees. The paper uses degree 2 everywhere; both defaults here are 3:
 //   - Laplacian rows: degree m reproduces polynomials of degree m, so the truncation error of a
@@ -39,6 +52,7 @@ struct PoissonOptions {
   /// The most nodes a stencil of `n_target` may keep under the rule (0: no limit).
   int node_cap(int n_target) const;
   bool regular_fd = true;                ///< plain FD where the neighbourhood is regular
+  IrregularRows irregular = IrregularRows::laplacian;  ///< the rows of the other cells (see above)
   Nullspace nullspace = Nullspace::pin;  ///< for singular (pure Neumann) problems
   /// Share RBF-FD weights between congruent stencils within one assembly (rbf::WeightCache):
   /// T-junctions of one layout repeat across the tree and across levels. Stencils holding an
@@ -81,5 +95,17 @@ template <int Dim>
 RowKind rbf_row(const tree::CellGraph<Dim>& graph, const DofLayout<Dim>& layout,
                 const Boundary<Dim>& boundary, tree::CellId c, const PoissonOptions& options,
                 rbf::WeightCache<Dim>* cache, RowScratch<Dim>& scratch, Row& row, rbf::Status& status);
+
+/// Adds the flux row of -div(beta grad p) at cell c (IrregularRows::flux) to `row`: each face's
+/// outward normal derivative (face_gradient_weights; towards a cell outside a level set, the
+/// ghost-fluid difference to the crossing, theta >= 1e-3 as the projection takes it; a Neumann wall's
+/// given flux, not scaled by beta) times area / volume and the face's beta (`coefficient`, empty:
+/// 1). `status` receives the weakest RBF-FD weights' status. Returns RowKind::rbf, or RowKind::fd when
+/// no face needed RBF-FD weights.
+template <int Dim>
+RowKind flux_row(const tree::CellGraph<Dim>& graph, const DofLayout<Dim>& layout, const Boundary<Dim>& boundary,
+                 tree::CellId c, const PoissonOptions& options, rbf::WeightCache<Dim>* cache,
+                 RowScratch<Dim>& scratch, Row& row, rbf::Status& status,
+                 std::span<const double> coefficient = {});
 
 }  // namespace liquid::mac

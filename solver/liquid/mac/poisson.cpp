@@ -53,6 +53,21 @@ std::vector<Row> laplacian_rows(const tree::CellGraph<Dim>& graph, const Poisson
                                   fmt::join(x.data(), x.data() + Dim, ", "), c));
         }
         AssemblyStats& s = local.stats;
+        if (options.irregular == IrregularRows::flux) {
+          rbf::Status st;
+          const RowKind kind = flux_row(graph, sys.layout, sys.boundary, c, options, cache, local.scratch, row, st,
+                                        problem.face_coefficient);
+          if (kind == RowKind::fd) {
+            ++s.n_fd_rows;
+            return;
+          }
+          ++s.n_rbf_rows;
+          if (st.info == rbf::Info::degree_reduced) ++s.n_degree_reduced;
+          s.min_degree = std::min(s.min_degree, st.degree_used);
+          s.max_stencil = std::max(s.max_stencil, st.n_nodes);
+          if (st.condition > s.worst_condition) s.worst_condition = st.condition, s.worst_condition_cell = c;
+          return;
+        }
         if (options.regular_fd && regular_neighbourhood(graph, c)) {
           ++(fd_row(graph, sys.layout, sys.boundary, c, row, problem.face_coefficient) == RowKind::fd
                  ? s.n_fd_rows
@@ -63,7 +78,7 @@ std::vector<Row> laplacian_rows(const tree::CellGraph<Dim>& graph, const Poisson
           const Vec<Dim> x = graph.centre(c);
           throw Error(fmt::format(
               "cell {} at ({:.6g}) needs an RBF-FD row, which takes no face coefficients (a variable-density "
-              "PPE needs a uniform tree and regular_fd)",
+              "PPE needs a uniform tree and regular_fd, or flux rows)",
               c, fmt::join(x.data(), x.data() + Dim, ", ")));
         }
         rbf::Status st;

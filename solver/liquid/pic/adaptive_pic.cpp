@@ -936,6 +936,9 @@ PicStepReport AdaptivePic<Dim>::advance(double dt) {
       r.grid_energy_before = grid_energy();
       r.pressure_work = project(dt);
       r.grid_energy_after = grid_energy();
+      const std::vector<double> div = mac::fv_divergence<Dim>(graph_, u_);
+      for (tree::CellId c : cls_.fluid)
+        r.divergence_after = std::max(r.divergence_after, std::abs(div[c]) * graph_.cell_size(c)[0]);
     });
     phase("extrapolate", [&] { extrapolate(); });
     phase("g2p", [&] { to_particles(r); });

@@ -184,12 +184,14 @@ struct PicOptions {
     refill_emptied = false;
     poisson.rbf.degree = 2;
     poisson.gradient_degree = 2;
+    poisson.irregular = mac::IrregularRows::laplacian;
   }
   /// True when the transfer and reseeding are the paper's preset (what apply_paper_preset() sets).
   bool paper_preset() const {
     return rbf.exponent == 5 && rbf.degree == 2 && reseeding.lo == (Dim == 2 ? 3 : 5) &&
            reseeding.hi == (Dim == 2 ? 12 : 15) && !reseeding.keep && !uniform_patches && !refill_emptied &&
-           poisson.rbf.degree == 2 && poisson.gradient_degree == 2;
+           poisson.rbf.degree == 2 && poisson.gradient_degree == 2 &&
+           poisson.irregular == mac::IrregularRows::laplacian;
   }
   static Vec<Dim> default_gravity() {
     Vec<Dim> g = Vec<Dim>::Zero();
@@ -222,6 +224,10 @@ struct PicStepReport {
   /// projection never raises it; the RBF-FD rows on a tree are not D G, so `after > before` is
   /// possible there and is worth watching.
   double grid_energy_before = 0.0, grid_energy_after = 0.0;
+  /// The largest |div u| h over the fluid cells after the projection (finite volumes, h the cell's
+  /// size): what the projection leaves, a velocity. With flux rows (mac::IrregularRows::flux) it is the
+  /// solver's residual alone; with RBF-FD Laplacian rows also the rows' departure from D G.
+  double divergence_after = 0.0;
   /// The work the pressure applied in volumes did this step in the particles' transferred masses:
   /// W = -dt sum_f m_f u_f d_f p over the projected faces, with m_f the face's transferred mass (a
   /// unit per particle: a full cell's seeded particles weigh 2^Dim on each of its faces), u_f after

@@ -595,6 +595,7 @@ const std::vector<std::string> solver_keys = {"method",
                                               "transfer_exponent",
                                               "transfer_degree",
                                               "ppe_degree",
+                                              "ppe_rows",
                                               "patch_transfer",
                                               "level_change_p2g",
                                               "affine_outside_patches",
@@ -650,6 +651,9 @@ void read_pic_solver(const TableReader& r, Scene<Dim>& s) {
   // Degree 2 is the least that reproduces quadratics, which a consistent Laplacian row needs.
   if (r.has("ppe_degree"))
     o.poisson.rbf.degree = o.poisson.gradient_degree = static_cast<int>(r.integer_in("ppe_degree", 2, 4));
+  // The rows at T-junctions: the paper's RBF-FD Laplacian, or the flux sum of the projection's own
+  // face gradients (the PPE then is exactly D G).
+  if (r.has("ppe_rows")) o.poisson.irregular = mac::parse_irregular_rows(r.choice("ppe_rows", {"laplacian", "flux"}));
   if (r.has("patch_transfer")) o.uniform_patches = r.choice("patch_transfer", {"apic", "rbf"}) == "apic";
   o.tent_at_level_changes = r.choice("level_change_p2g", {"rbf", "tent"}, std::string("rbf")) == "tent";
   LIQUID_VERIFY(!o.tent_at_level_changes || o.uniform_patches,
@@ -677,6 +681,10 @@ void read_pic_solver(const TableReader& r, Scene<Dim>& s) {
   o.extrapolation_layers = static_cast<int>(r.integer_in("extrapolation", 1, 64, 4));
   o.advect_cfl = r.positive("advect_cfl", 1.0);
   o.surface = pic::parse_pic_surface(r.choice("surface", {"air", "levelset"}, std::string("air")));
+  LIQUID_VERIFY(o.surface != pic::PicSurface::levelset || o.poisson.irregular != mac::IrregularRows::flux,
+                "{}: flux rows go with surface = \"air\" (with the level-set surface their ghost-fluid faces "
+                "at level changes cost 10-65x the accuracy; docs/findings/transfer-stability.md)",
+                r.where("ppe_rows"));
   o.surface_radius = r.positive("surface_radius", o.surface_radius);
   LIQUID_VERIFY(o.surface_radius < 2.0, "{}: {} finest cells is too wide (below 2)",
                 r.where("surface_radius"), o.surface_radius);

@@ -126,7 +126,8 @@ TEST(Scene, ValuesAndOverridesReachTheSolverOptions) {
     const auto at = toml.find("[solver]");
     const std::string keys =
         "\nshare_factors = false\ncondition_estimate = \"hager-higham\"\nnullspace = \"pin\""
-        "\ntransfer_exponent = 3\ntransfer_degree = 1\nreseed_mode = \"holes\"\nppe_degree = 3";
+        "\ntransfer_exponent = 3\ntransfer_degree = 1\nreseed_mode = \"holes\"\nppe_degree = 3"
+        "\nppe_rows = \"flux\"";
     toml = at == std::string::npos ? toml + "\n[solver]" + keys + "\n" : toml.insert(at + 8, keys);
     const std::string path = ::testing::TempDir() + "/own-factors.toml";
     std::ofstream(path) << toml;
@@ -134,6 +135,7 @@ TEST(Scene, ValuesAndOverridesReachTheSolverOptions) {
     EXPECT_FALSE(own.pic.rbf.share_factors);
     EXPECT_EQ(own.pic.poisson.rbf.degree, 3);  // ppe_degree: the RBF-FD rows and the face gradients
     EXPECT_EQ(own.pic.poisson.gradient_degree, 3);
+    EXPECT_EQ(own.pic.poisson.irregular, mac::IrregularRows::flux);
     // The paper's preset (liquid run --paper, applied after the scene's keys) restores its degree 2,
     // and a PPE of another degree is not the paper's.
     pic::PicOptions<2> paper = own.pic;
@@ -142,7 +144,11 @@ TEST(Scene, ValuesAndOverridesReachTheSolverOptions) {
     EXPECT_TRUE(paper.paper_preset());
     EXPECT_EQ(paper.poisson.rbf.degree, 2);
     EXPECT_EQ(paper.poisson.gradient_degree, 2);
+    EXPECT_EQ(paper.poisson.irregular, mac::IrregularRows::laplacian);
     paper.poisson.gradient_degree = 3;
+    EXPECT_FALSE(paper.paper_preset());
+    paper.poisson.gradient_degree = 2;
+    paper.poisson.irregular = mac::IrregularRows::flux;
     EXPECT_FALSE(paper.paper_preset());
     EXPECT_EQ(own.pic.rbf.condition_estimate, rbf::ConditionEstimate::hager_higham);
     EXPECT_EQ(own.pic.poisson.nullspace, mac::Nullspace::pin);

@@ -15,7 +15,8 @@
 // Measured: the largest particle speed |v_p| / sqrt(gH) at every step; its largest value over the
 // run and its value at the end; its exponential growth rate lambda (1/s): the least-squares slope of
 // ln max|v_p| against t over the second half of the run (once the first steps' transient is gone),
-// with its standard error and the doubling time ln 2 / lambda.
+// with its standard error and the doubling time ln 2 / lambda; and the largest |div u| h a projection
+// left in a fluid cell (adaptive-rbf-flux, full tier: flux rows, whose PPE is exactly D G).
 // Exact solution: u = 0, p = g (H - y).
 // Expected (asserted), for the default and for APIC: the speed stays below 1e-6 sqrt(gH) for the
 // whole run, and the growth rate is not above 0 by more than 2 standard errors (the paper's preset
@@ -47,6 +48,7 @@ const FlowMethod kMethods[] = {{"adaptive-rbf", true, pic::PicTransfer::rbf},
                                {"adaptive-rbf-everywhere", true, pic::PicTransfer::rbf, false, true},
                                {"adaptive-rbf-tent", true, pic::PicTransfer::rbf, false, false, true},
                                {"adaptive-rbf-ppe3", true, pic::PicTransfer::rbf, false, false, false, 3},
+                               {"adaptive-rbf-flux", true, pic::PicTransfer::rbf, false, false, false, 0, true},
                                {"adaptive-rbf-paper", true, pic::PicTransfer::rbf, true},
                                {"regular-apic", false, pic::PicTransfer::apic}};
 
@@ -60,6 +62,7 @@ struct Tank {
 struct Outcome {
   double largest = 0.0, last = 0.0;  ///< max |v_p| / sqrt(gH): over the run, at the end
   double rate = NAN, rate_error = NAN;
+  double divergence = 0.0;  ///< the largest |div u| h / sqrt(gH) a projection left over the run
   long steps = 0;
   double seconds_per_step = 0.0;
   std::vector<double> t, speed;  ///< the samples the rate is fitted to
@@ -99,6 +102,7 @@ Outcome run_pool(const FlowMethod& m, const Tank& tank) {
   if (m.everywhere) o.uniform_patches = false;
   if (m.tent) o.tent_at_level_changes = true, o.rbf_gradient_affine = false;
   if (m.ppe_degree > 0) o.poisson.rbf.degree = o.poisson.gradient_degree = m.ppe_degree;
+  if (m.flux_rows) o.poisson.irregular = mac::IrregularRows::flux;
   pic::AdaptivePic<Dim> sim(o);
   Vec<Dim> hi = size;
   hi[1] = kDepth;
@@ -108,7 +112,8 @@ Outcome run_pool(const FlowMethod& m, const Tank& tank) {
   Stopwatch clock;
   while (sim.time() < tank.end - 1e-12) {
     const double dt = std::min(sim.stable_dt(1.0, 0.02), tank.end - sim.time());
-    sim.advance(dt);
+    const pic::PicStepReport report = sim.advance(dt);
+    out.divergence = std::max(out.divergence, report.divergence_after / std::sqrt(kGravity * kDepth));
     ++out.steps;
     double vp = 0.0;
     for (const auto& v : sim.particles().v) vp = std::max(vp, v.norm());
@@ -131,12 +136,13 @@ void study(const Tank& tank, const std::vector<FlowMethod>& methods, Table& tabl
     const Outcome o = run_pool<Dim>(m, tank);
     const double doubling = o.rate > 0 ? std::log(2.0) / o.rate : std::numeric_limits<double>::infinity();
     fmt::print(
-        "  {}D {} L{} {}: largest speed {:.2e} sqrt(gH), growth {:.3f} +- {:.3f} / s ({} steps, {:.3f} "
-        "s/step)\n",
-        Dim, tank.name, tank.finest, m.name, o.largest, o.rate, o.rate_error, o.steps, o.seconds_per_step);
+        "  {}D {} L{} {}: largest speed {:.2e} sqrt(gH), growth {:.3f} +- {:.3f} / s, |div u| h after the "
+        "projection up to {:.1e} sqrt(gH) ({} steps, {:.3f} s/step)\n",
+        Dim, tank.name, tank.finest, m.name, o.largest, o.rate, o.rate_error, o.divergence, o.steps,
+        o.seconds_per_step);
     std::fflush(stdout);
     table.add_row({long(Dim), std::string(tank.name), long(tank.finest), std::string(m.name), o.steps,
-                   tank.end, o.largest, o.last, o.rate, o.rate_error, doubling, o.seconds_per_step});
+                   tank.end, o.largest, o.last, o.rate, o.rate_error, doubling, o.divergence, o.seconds_per_step});
     for (int k = 1; k <= 10; ++k) {
       const std::size_t i = std::min(o.t.size() - 1, o.t.size() * k / 10);
       series.add_row(
@@ -145,7 +151,7 @@ void study(const Tank& tank, const std::vector<FlowMethod>& methods, Table& tabl
     const std::string key = fmt::format("{}D {} L{} {}", Dim, tank.name, tank.finest, m.name);
     result.gate.push_back({key + " max particle speed", GateFigure::Kind::error, std::max(o.largest, 1e-12)});
     const bool grows = !(o.rate - 2.0 * o.rate_error <= 0.0);
-    if (m.paper || m.everywhere || m.tent || m.ppe_degree > 0) {
+    if (m.paper || m.everywhere || m.tent || m.ppe_degree > 0 || m.flux_rows) {
       if (grows || o.largest > 1e-6)
         result.warnings.push_back(fmt::format(
             "{}: {} lets the still pool move: |v_p| up to {:.2e} sqrt(gH), growing at {:.3f} / s (doubling "
@@ -154,6 +160,7 @@ void study(const Tank& tank, const std::vector<FlowMethod>& methods, Table& tabl
             m.paper            ? std::string("the paper's preset")
             : m.everywhere     ? std::string("the RBF transfer everywhere")
             : m.ppe_degree > 0 ? fmt::format("the PPE with degree-{} RBF-FD rows", m.ppe_degree)
+            : m.flux_rows      ? std::string("the PPE with flux rows at T-junctions")
                                : std::string("APIC in uniform patches with tents at level changes"),
             o.largest, o.rate, doubling));
       continue;
@@ -171,11 +178,13 @@ CaseResult run(const CaseOptions& options) {
   CaseResult result;
   Table table("still pool over a long run: the largest particle speed and its growth",
               {"dim", "tank", "finest", "method", "steps", "T (s)", "max |v_p| / sqrt(gH)", "at the end",
-               "growth rate (1/s)", "+-", "doubling time (s)", "s/step"});
+               "growth rate (1/s)", "+-", "doubling time (s)", "max |div u| h after projection / sqrt(gH)",
+               "s/step"});
   Table series("over time", {"dim", "tank", "finest", "method", "t", "max |v_p| / sqrt(gH)"});
   std::vector<FlowMethod> methods = chosen_methods(kMethods, options.methods);
   if (!options.full && options.methods.empty())  // the quick tier leaves the full tier's comparison row out
-    std::erase_if(methods, [](const FlowMethod& m) { return m.everywhere || m.tent || m.ppe_degree > 0; });
+    std::erase_if(methods,
+                  [](const FlowMethod& m) { return m.everywhere || m.tent || m.ppe_degree > 0 || m.flux_rows; });
   const LevelRange levels = options.levels.value_or(options.full ? LevelRange{4, 5} : LevelRange{4, 4});
   LIQUID_VERIFY(levels.first >= 3 && levels.last <= 6,
                 "pool-stability: --levels {}:{} is outside 3:6 (finest levels; the interior is two coarser)",
