@@ -183,6 +183,11 @@ void add_study_flags(CLI::App& app, StudyFlags& f) {
   app.add_option("--sizes", f.sizes,
                  "sph-gain-scaling: one dimension and its spacings a/N, as D:N[,N...] (e.g. 3:48; N from 4 to "
                  "1000, increasing)");
+  app.add_option("--resample-travel", f.resample_travel,
+                 "sph-adaptivity-gain, sph-gain-scaling: resample once the fastest particle may have travelled this "
+                 "many level-0 spacings (0 to 100; 0: every 5th step, the paper's)")
+      ->check(finite_number)
+      ->check(CLI::Range(0.0, 100.0));
   app.add_option("--max-cells", f.max_cells, kMaxCellsHelp)->check(CLI::Range(1L, 1'000'000'000'000L));
   app.add_flag("--full", f.full, "use the full suite's extent");
 }
@@ -194,7 +199,7 @@ CaseOptions case_options(const StudyFlags& f, const CaseInfo& info) {
                    Option::ring_cap,     Option::rows,       Option::nullspace,       Option::tolerance,
                    Option::algebraic,    Option::perturb,    Option::trees,           Option::methods,
                    Option::seed,         Option::particles,  Option::radius,          Option::aspect,
-                   Option::merge_wait,   Option::duration, Option::sizes})
+                   Option::merge_wait,   Option::duration, Option::sizes, Option::resample_travel})
     if (f.given(o) && !info.accepts_option(o)) refused.push_back(flag_of(o));
   if (!refused.empty()) {
     std::vector<std::string> accepted;
@@ -250,6 +255,7 @@ CaseOptions case_options(const StudyFlags& f, const CaseInfo& info) {
   if (f.given(Option::merge_wait)) o.merge_wait = f.merge_wait;
   if (f.given(Option::duration)) o.duration = f.duration;
   if (f.given(Option::sizes)) o.sizes = parse_size_list(f.sizes, "--sizes");
+  if (f.given(Option::resample_travel)) o.resample_travel = f.resample_travel;
   o.max_cells = f.max_cells;
   o.full = f.full;
   return o;
@@ -283,6 +289,7 @@ std::string echo(const std::string& case_name, const StudyFlags& f) {
   s += show(Option::merge_wait, std::to_string(f.merge_wait));
   s += show(Option::duration, fmt::format("{:g}", f.duration));
   s += show(Option::sizes, f.sizes);
+  s += show(Option::resample_travel, fmt::format("{:g}", f.resample_travel));
   s += fmt::format(" --max-cells {} --tier {}", f.max_cells, f.full ? "full" : "quick");
   return s;
 }

@@ -35,6 +35,7 @@ struct StudyFlags {
   int merge_wait = 0;
   double duration = 0.0;
   std::string sizes;
+  double resample_travel = 0.0;
   long max_cells = 0;
   bool full = false;
 

@@ -42,7 +42,8 @@ enum class Option {
   aspect,
   merge_wait,
   duration,
-  sizes
+  sizes,
+  resample_travel
 };
 using OptionSet = std::vector<Option>;
 /// The command-line flag of an option ("--max-jump").
@@ -114,6 +115,7 @@ struct CaseOptions {
   std::optional<int> merge_wait;              ///< --merge-wait N: SPH, passes before a split's children merge
   std::optional<double> duration;             ///< --duration T: simulated seconds of a long run
   std::optional<SizeList> sizes;              ///< --sizes D:N,N: a size study's dimension and divisions
+  std::optional<double> resample_travel;      ///< --resample-travel S: SPH, spacings travelled between passes
   long max_cells = 0;                         ///< budget: refuse rows above this many cells (0: no limit)
   bool full = false;                          ///< the full suite's extent rather than the quick one
 };

@@ -302,6 +302,7 @@ std::string format_box(const Box<Dim>& b) {
 const std::vector<std::string> sph_keys = {"spacing",
                                            "levels",
                                            "resample_every",
+                                           "resample_travel",
                                            "merge_min_passes",
                                            "alpha",
                                            "beta",
@@ -361,6 +362,10 @@ void read_sph(const TableReader& r, Scene<Dim>& s) {
   }
   o.max_level = static_cast<int>(r.integer_in("levels", 0, 12, o.max_level));
   o.resample_every = static_cast<int>(r.integer_in("resample_every", 1, 100000, o.resample_every));
+  o.resample_travel = r.number("resample_travel", o.resample_travel);
+  LIQUID_VERIFY(std::isfinite(o.resample_travel) && o.resample_travel >= 0.0 && o.resample_travel <= 100.0,
+                "{}: {} is outside [0, 100] (level-0 spacings; 0: every resample_every-th step)",
+                r.where("resample_travel"), o.resample_travel);
   o.merge_min_passes = static_cast<int>(r.integer_in("merge_min_passes", 0, 1000, o.merge_min_passes));
   o.resampling.alpha = r.positive("alpha", o.resampling.alpha);
   o.resampling.beta = r.positive("beta", o.resampling.beta);

@@ -214,6 +214,8 @@ std::string SphSceneRunner<Dim>::checkpoint() {
   w.put_scalar("sph/time", st.time);
   w.put_scalar("sph/step", static_cast<std::int64_t>(st.steps));
   w.put_string("sph/rng", st.rng);
+  w.put_scalar("sph/travel", st.travel);
+  w.put("sph/pass_steps", std::span<const std::int64_t>(st.pass_steps));
   w.put_scalar("run/frame", static_cast<std::int64_t>(frame_));
   w.put_scalar("run/next_frame", next_frame_);
   const std::vector<std::int64_t> counts = {steps_,         split_,         merged_, emitted_,
@@ -272,6 +274,17 @@ SphSceneRunner<Dim> SphSceneRunner<Dim>::resume(const std::string& checkpoint, R
   st.time = r.scalar_double("sph/time");
   st.steps = r.scalar_int("sph/step");
   st.rng = r.string("sph/rng");
+  if (r.has("sph/travel")) {
+    st.travel = r.scalar_double("sph/travel");
+    st.pass_steps = r.int64s("sph/pass_steps");
+  } else {  // saved before the travel rule: the fixed cadence's passes
+    const long every = scene.sph_scene.options.resample_every;
+    std::vector<std::int64_t> back;  // newest first
+    for (long k = st.steps > 0 ? (st.steps - 1) - (st.steps - 1) % every : -1;
+         k >= 0 && back.size() < static_cast<std::size_t>(sph::kPassHistory); k -= every)
+      back.push_back(k);
+    st.pass_steps.assign(back.rbegin(), back.rend());
+  }
 
   SphSceneRunner run(std::move(scene), std::move(settings), false);
   try {

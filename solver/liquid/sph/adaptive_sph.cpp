@@ -78,6 +78,8 @@ void SphOptions<Dim>::check() const {
                 fluid.rest_density, fluid.stiffness, fluid.viscosity);
   LIQUID_VERIFY(max_level >= 0 && max_level <= 12, "sph: max_level must be within 0..12, not {}", max_level);
   LIQUID_VERIFY(resample_every >= 1, "sph: resample_every must be at least 1, not {}", resample_every);
+  LIQUID_VERIFY(std::isfinite(resample_travel) && resample_travel >= 0.0 && resample_travel <= 100.0,
+                "sph: resample_travel must be within [0, 100] spacings, not {}", resample_travel);
   LIQUID_VERIFY(merge_min_passes >= 0 && merge_min_passes <= 1000,
                 "sph: merge_min_passes must be within 0..1000, not {}", merge_min_passes);
   LIQUID_VERIFY(resampling.alpha > 0.0 && resampling.beta > resampling.alpha,
@@ -421,8 +423,14 @@ void AdaptiveSph<Dim>::redistance_and_resample(SphStepReport& report) {
     const SolidTest<Dim> solid = [this](const Vec<Dim>& x) { return in_collision_margin(x); };
     ResampleOptions o = options_.resampling;
     o.now = steps_;
-    o.merge_min_age = static_cast<std::int64_t>(options_.merge_min_passes) * options_.resample_every;
-    o.churn_window = static_cast<std::int64_t>(kChurnPasses) * options_.resample_every;
+    // "Within N passes", in steps: back to the N-th last pass (all of the run while there were fewer).
+    const auto window = [this](int passes) -> std::int64_t {
+      if (passes <= 0) return 0;
+      if (pass_steps_.size() < static_cast<std::size_t>(passes)) return steps_ + 1;
+      return steps_ - pass_steps_[pass_steps_.size() - passes];
+    };
+    o.merge_min_age = window(options_.merge_min_passes);
+    o.churn_window = window(kChurnPasses);
     report.resampling = resample<Dim>(p_, exact, sizes_, o, solid, rng_, &origin);
   }
   if (report.resampling.split + report.resampling.merged == 0) return;
@@ -734,10 +742,21 @@ void AdaptiveSph<Dim>::collide() {
 }
 
 template <int Dim>
+bool AdaptiveSph<Dim>::resampling_due() const {
+  if (options_.resample_travel <= 0.0) return steps_ % options_.resample_every == 0;  // the paper's cadence
+  if (pass_steps_.empty()) return true;
+  const std::int64_t since = steps_ - pass_steps_.back();
+  if (since < options_.resample_every) return false;
+  for (const SphSource<Dim>& src : options_.sources)
+    if (src.active(time_)) return since % options_.resample_every == 0;
+  return travel_ >= options_.resample_travel * options_.spacing;
+}
+
+template <int Dim>
 SphStepReport AdaptiveSph<Dim>::advance(double dt) {
   LIQUID_VERIFY(dt > 0.0 && std::isfinite(dt), "sph: the time step must be positive and finite, not {}", dt);
   auto total = timer_.scope("total");
-  const bool resampling = steps_ % options_.resample_every == 0;
+  const bool resampling = resampling_due();
   SphStepReport report;
   const auto phase = [this](const char* name, auto&& body) {
     const auto t = timer_.scope(name);
@@ -747,7 +766,12 @@ SphStepReport AdaptiveSph<Dim>::advance(double dt) {
   phase("neighbours", [&] { update_neighbours(resampling, report); });
   std::vector<Vec<Dim>> shift;  // FluidConstants::shifting: from the rate's pairs
   phase("forces", [&] { forces(dt, report, shift); });
-  if (resampling) redistance_and_resample(report);  // timed as redistance, elfs and resample
+  if (resampling) {
+    redistance_and_resample(report);  // timed as redistance, elfs and resample
+    travel_ = 0.0;
+    pass_steps_.push_back(steps_);
+    if (pass_steps_.size() > static_cast<std::size_t>(kPassHistory)) pass_steps_.erase(pass_steps_.begin());
+  }
   // Split or merged particles have no shift of their own: none this step.
   if (static_cast<int>(shift.size()) != p_.size() || report.resampling.split + report.resampling.merged > 0)
     shift.clear();
@@ -756,6 +780,7 @@ SphStepReport AdaptiveSph<Dim>::advance(double dt) {
   time_ += dt;
   ++steps_;
   tally(dt, report);
+  travel_ += report.max_speed * dt;
   return report;
 }
 
@@ -905,7 +930,8 @@ void AdaptiveSph<Dim>::relax(double duration, const Box<Dim>* hold) {
     t += dt;
   }
   for (auto& v : p_.v) v.setZero();
-  time_ = 0.0, steps_ = 0;
+  time_ = 0.0, steps_ = 0, travel_ = 0.0;
+  pass_steps_.clear();
   // The clock restarts: nothing is young at t = 0 (the resampling at rest made what it made).
   std::fill(p_.born.begin(), p_.born.end(), -1);
   std::fill(p_.birth.begin(), p_.birth.end(), SphParticles<Dim>::Birth::seeded);
@@ -932,6 +958,8 @@ SphState<Dim> AdaptiveSph<Dim>::state() const {
   st.particles = p_;
   st.time = time_;
   st.steps = steps_;
+  st.travel = travel_;
+  st.pass_steps = pass_steps_;
   std::ostringstream text;
   text << rng_;
   st.rng = text.str();
@@ -988,6 +1016,12 @@ void AdaptiveSph<Dim>::restore(SphState<Dim> st) {
   }
   LIQUID_VERIFY(std::isfinite(st.time) && st.time >= 0.0 && st.steps >= 0,
                 "sph: the saved clock is not valid");
+  LIQUID_VERIFY(std::isfinite(st.travel) && st.travel >= 0.0 &&
+                    st.pass_steps.size() <= static_cast<std::size_t>(kPassHistory) &&
+                    std::is_sorted(st.pass_steps.begin(), st.pass_steps.end()) &&
+                    (st.pass_steps.empty() || (st.pass_steps.front() >= 0 && st.pass_steps.back() <= st.steps)),
+                "sph: the saved resampling clock is not valid (travel {}, {} past passes, step {})", st.travel,
+                st.pass_steps.size(), st.steps);
   std::istringstream text(st.rng);
   std::mt19937_64 rng;
   text >> rng;
@@ -995,6 +1029,8 @@ void AdaptiveSph<Dim>::restore(SphState<Dim> st) {
   p_ = std::move(st.particles);
   time_ = st.time;
   steps_ = st.steps;
+  travel_ = st.travel;
+  pass_steps_ = std::move(st.pass_steps);
   rng_ = rng;
 }
 

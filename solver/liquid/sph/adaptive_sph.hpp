@@ -87,6 +87,8 @@ struct SphView {
 /// Churn's window, in resampling passes: a particle made by a split and merged within it, or made by
 /// a merge and split within it, counts as churn (ResampleStats::churn_merged, churn_split).
 inline constexpr int kChurnPasses = 3;
+/// How many past passes' steps a simulation keeps: the longest merge wait (1000 passes) and one more.
+inline constexpr int kPassHistory = 1001;
 
 template <int Dim>
 struct SphOptions {
@@ -99,6 +101,11 @@ struct SphOptions {
   bool adaptive = true;
   int max_level = 3;       ///< coarsest level a merge may make
   int resample_every = 5;  ///< redistance / elfs / resample every k-th step (paper: 5)
+  /// With a value above 0, a pass waits (at least resample_every steps) until the fastest particle may
+  /// have travelled this many level-0 spacings since the last one: the sum over the steps of the
+  /// largest speed times dt. The paper suggests such a criterion (Sec. 7); 0 is its fixed cadence.
+  /// While a source is on, the fixed cadence holds. Why this default: docs/findings/sph.md.
+  double resample_travel = 0.5;
   /// A split's children are not merged for this many resampling passes (0: the paper's, no wait).
   /// Churn (a particle made by a split merged, or one made by a merge split, within kChurnPasses
   /// passes) is counted either way. Measured: docs/findings/sph.md.
@@ -178,6 +185,10 @@ struct SphState {
   double time = 0.0;
   long steps = 0;
   std::string rng;
+  double travel = 0.0;  ///< the travel bound since the last resampling pass (SphOptions::resample_travel)
+  /// The steps of the last resampling passes, oldest first (at most kPassHistory): churn and the merge
+  /// wait count in passes.
+  std::vector<std::int64_t> pass_steps;
 };
 
 template <int Dim>
@@ -284,6 +295,9 @@ class AdaptiveSph {
   /// The every-k-th-step phases on the current neighbour lists: redistance, and when adaptive elfs
   /// and resample (timed under those names).
   void redistance_and_resample(SphStepReport& report);
+  /// Whether this step runs the redistancing, feature-size and resampling pass (SphOptions::resample_every,
+  /// resample_travel).
+  bool resampling_due() const;
   /// integrate: symplectic Euler (v, then x, then the continuity density); shift may be empty.
   void integrate(double dt, const std::vector<Vec<Dim>>& shift);
   /// The step's tallies: particles per level, the largest speed.
@@ -306,6 +320,8 @@ class AdaptiveSph {
   std::mt19937_64 rng_;
   double time_ = 0.0;
   long steps_ = 0;
+  double travel_ = 0.0;                   ///< largest speed x dt summed since the last resampling pass
+  std::vector<std::int64_t> pass_steps_;  ///< SphState::pass_steps
 };
 
 }  // namespace liquid::sph

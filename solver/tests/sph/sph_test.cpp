@@ -1036,6 +1036,9 @@ TEST(AdaptiveSph, RefusesImpossibleOptions) {
       {"rest density", [](SphOptions<2>& o) { o.fluid.viscosity = -1.0; }},
       {"max_level", [](SphOptions<2>& o) { o.max_level = 99; }},
       {"resample_every", [](SphOptions<2>& o) { o.resample_every = 0; }},
+      {"resample_travel", [](SphOptions<2>& o) { o.resample_travel = -0.5; }},
+      {"resample_travel", [&](SphOptions<2>& o) { o.resample_travel = nan; }},
+      {"resample_travel", [](SphOptions<2>& o) { o.resample_travel = 1e6; }},
       {"neighbour skin", [](SphOptions<2>& o) { o.neighbour_skin = -1.0; }},
       {"gamma", [&](SphOptions<2>& o) { o.gamma_degrees = nan; }},
       {"disks", [](SphOptions<2>& o) { o.disk_radius = 0.0; }},
@@ -1073,6 +1076,75 @@ TEST(AdaptiveSph, SettlesBehindAGateAndThenOpensIt) {
   double front = 0.0;
   for (const auto& x : sim.particles().x) front = std::max(front, x[0]);
   EXPECT_GT(front, 0.22) << "the column did not spread once the gate opened";
+}
+
+/// The travel rule: a pass waits at least resample_every steps and until the fastest particle may
+/// have travelled resample_travel spacings; 0 is the fixed cadence. A resumed state keeps the rule's
+/// clock: it continues with the same passes, to the bit.
+TEST(AdaptiveSph, ResamplesAfterTheTravelAndResumesItsClock) {
+  SphOptions<2> o;
+  o.container = Box<2>{Vec<2>(0, 0), Vec<2>(1, 0.6)};
+  o.spacing = 0.02;
+  const Box<2> column{Vec<2>(0, 0), Vec<2>(0.2, 0.4)};
+  const auto passes_of = [&](double travel, int steps, std::vector<double>* bounds) {
+    SphOptions<2> q = o;
+    q.resample_travel = travel;
+    AdaptiveSph<2> sim(q);
+    sim.seed(levelset::box<2>(column));
+    std::vector<int> at;
+    double since = 0.0;
+    for (int k = 0; k < steps; ++k) {
+      const SphStepReport r = sim.advance(2e-4);
+      if (r.resampled) {
+        at.push_back(k);
+        if (bounds && k > 0) bounds->push_back(since);
+        since = 0.0;
+      }
+      since += r.max_speed * r.dt;
+    }
+    return at;
+  };
+  const std::vector<int> fixed = passes_of(0.0, 200, nullptr);
+  ASSERT_EQ(fixed.size(), 40u);
+  for (std::size_t k = 0; k < fixed.size(); ++k) EXPECT_EQ(fixed[k], static_cast<int>(5 * k));
+  std::vector<double> bounds;
+  const std::vector<int> travelled = passes_of(0.25, 200, &bounds);
+  ASSERT_GE(travelled.size(), 3u) << "the column falls: it must travel a quarter spacing more than twice";
+  EXPECT_LT(travelled.size(), fixed.size());
+  EXPECT_EQ(travelled.front(), 0);
+  for (std::size_t k = 1; k < travelled.size(); ++k) EXPECT_GE(travelled[k] - travelled[k - 1], 5);
+  for (double b : bounds) EXPECT_GE(b, 0.25 * o.spacing);
+  // A liquid at rest travels nothing: after the first pass none follows.
+  {
+    SphOptions<2> q = o;
+    q.resample_travel = 0.25;
+    q.gravity.setZero();
+    AdaptiveSph<2> sim(q);
+    sim.seed(levelset::box<2>(column));
+    int count = 0;
+    for (int k = 0; k < 50; ++k) count += sim.advance(2e-4).resampled;
+    EXPECT_EQ(count, 1);
+  }
+  // Stopped at step 37 and restored into a fresh simulation: the same passes and particles after.
+  SphOptions<2> q = o;
+  q.resample_travel = 0.25;
+  AdaptiveSph<2> a(q), b(q);
+  a.seed(levelset::box<2>(column));
+  for (int k = 0; k < 37; ++k) a.advance(2e-4);
+  b.restore(a.state());
+  for (int k = 0; k < 60; ++k) {
+    const SphStepReport ra = a.advance(2e-4), rb = b.advance(2e-4);
+    ASSERT_EQ(ra.resampled, rb.resampled) << "step " << 37 + k;
+  }
+  ASSERT_EQ(a.particles().size(), b.particles().size());
+  for (int i = 0; i < a.particles().size(); ++i) ASSERT_EQ(a.particles().x[i], b.particles().x[i]);
+  // A state whose pass history is not a clock is refused.
+  SphState<2> damaged = a.state();
+  damaged.pass_steps = {10, 5};
+  EXPECT_THROW(b.restore(damaged), Error);
+  damaged = a.state();
+  damaged.travel = -1.0;
+  EXPECT_THROW(b.restore(damaged), Error);
 }
 
 TEST(AdaptiveSph, NamesTheParticleWhoseStateIsNotFinite) {

@@ -21,6 +21,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 #include <fmt/format.h>
 
@@ -52,7 +53,12 @@ struct Contender {
   std::vector<double> windows;  ///< seconds a step over each window
   Sample out;
 
-  Contender(bool adaptive, double s) : sim(sph_dam::options<Dim>(adaptive, s)) {
+  Contender(bool adaptive, double s, std::optional<double> travel)
+      : sim([&] {
+          sph::SphOptions<Dim> o = sph_dam::options<Dim>(adaptive, s);
+          if (travel) o.resample_travel = *travel;
+          return o;
+        }()) {
     sim.seed(levelset::box<Dim>(sph_dam::column<Dim>()));
     for (const char* phase : kPhases) before.push_back(sim.timer().seconds(phase));
   }
@@ -74,8 +80,8 @@ struct Contender {
 /// speed gain is the median over window pairs of their ratio, the seconds a step the medians of each
 /// run's windows (run one after the other, the gain moves with the machine's load).
 template <int Dim>
-std::pair<Sample, Sample> run_both(double s, int steps, double& speed_gain) {
-  Contender<Dim> single(false, s), adaptive(true, s);
+std::pair<Sample, Sample> run_both(double s, int steps, std::optional<double> travel, double& speed_gain) {
+  Contender<Dim> single(false, s, travel), adaptive(true, s, travel);
   const double dt = 0.25 * s / sph_dam::sound_speed();
   const int every = adaptive.sim.options().resample_every;
   std::vector<double> ratios;
@@ -96,7 +102,7 @@ std::pair<Sample, Sample> run_both(double s, int steps, double& speed_gain) {
 }
 
 template <int Dim>
-void study(CaseResult& result, const std::vector<int>& divisions, int steps) {
+void study(CaseResult& result, const std::vector<int>& divisions, int steps, std::optional<double> travel) {
   Table table(
       fmt::format("{}D dam break, the first {} steps: single resolution against adaptive", Dim, steps),
       {"s", "single particles", "adaptive particles", "memory gain", "single s/step", "adaptive s/step",
@@ -108,7 +114,7 @@ void study(CaseResult& result, const std::vector<int>& divisions, int steps) {
   for (int division : divisions) {
     const double s = kA / division;
     double speed_gain = 0.0;
-    const std::pair<Sample, Sample> both = run_both<Dim>(s, steps, speed_gain);
+    const std::pair<Sample, Sample> both = run_both<Dim>(s, steps, travel, speed_gain);
     const Sample &single = both.first, &adaptive = both.second;
     for (const Sample* r : {&single, &adaptive}) {
       std::vector<Table::Cell> row;
@@ -174,13 +180,13 @@ CaseResult run_full(const CaseOptions& options) {
                   sizes.dim, n, n, single);
     const int steps = sizes.dim == 2 ? 80 : 40;
     if (sizes.dim == 2)
-      study<2>(result, sizes.divisions, steps);
+      study<2>(result, sizes.divisions, steps, options.resample_travel);
     else
-      study<3>(result, sizes.divisions, steps);
+      study<3>(result, sizes.divisions, steps, options.resample_travel);
     return result;
   }
-  study<2>(result, {20, 40, 80, 160, 320}, 80);
-  study<3>(result, {16, 24, 32, 48, 64, 80}, 40);
+  study<2>(result, {20, 40, 80, 160, 320}, 80, options.resample_travel);
+  study<3>(result, {16, 24, 32, 48, 64, 80}, 40, options.resample_travel);
   return result;
 }
 
@@ -190,6 +196,6 @@ LIQUID_VERIFICATION_CASE(
     {"sph-gain-scaling",
      "SPH dam break start, single against adaptive at 2D s = a/20..a/320 and 3D s = a/16..a/80: memory and "
      "speed gains against resolution, extrapolated to the target (4x fewer particles, 3x faster)",
-     false, run_full, {Option::sizes}});
+     false, run_full, {Option::sizes, Option::resample_travel}});
 
 }  // namespace liquid::verification
