@@ -6,10 +6,11 @@
 //   neighbours  the symmetric neighbour lists (cell list or k-d tree, SphOptions::search; the tree
 //               is built on redistancing steps either way)
 //   forces      density, pressure, pair forces, gravity
-//   redistance  (every k-th step) particle-to-surface distances on the distance surface
-//   elfs        (every k-th step, adaptive) medial axis and extended local feature size (plus the
+//   redistance  (on pass steps: SphOptions::resample_every, resample_travel) particle-to-surface
+//               distances on the distance surface
+//   elfs        (pass steps, adaptive) medial axis and extended local feature size (plus the
 //               distance to the view, with SphOptions::view)
-//   resample    (every k-th step, adaptive) split and merge
+//   resample    (pass steps, adaptive) split and merge
 //   integrate   leap-frog: v += dt a, x += dt v (velocities live at half steps), plus the particle
 //               shift (FluidConstants::shifting) away from crowded parts of the liquid
 //   collisions  particles pushed out of obstacles and back into the container, inward velocity removed
@@ -100,7 +101,7 @@ struct SphOptions {
   double h_ratio = 2.5;   ///< the paper's h
   bool adaptive = true;
   int max_level = 3;       ///< coarsest level a merge may make
-  int resample_every = 5;  ///< redistance / elfs / resample every k-th step (paper: 5)
+  int resample_every = 5;  ///< redistance / elfs / resample at most every k-th step (paper: every 5th)
   /// With a value above 0, a pass waits (at least resample_every steps) until the fastest particle may
   /// have travelled this many level-0 spacings since the last one: the sum over the steps of the
   /// largest speed times dt. The paper suggests such a criterion (Sec. 7); 0 is its fixed cadence.
@@ -238,8 +239,8 @@ class AdaptiveSph {
   /// The total volume the particles stand for: sum m_i / rho_0.
   double volume() const { return p_.total_mass() / options_.fluid.rest_density; }
 
-  /// One redistance + feature size + resample pass at the current positions (what every k-th step
-  /// does); returns what it did. Public for the cases that resample without moving.
+  /// One redistance + feature size + resample pass at the current positions (what a pass step does);
+  /// returns what it did. Public for the cases that resample without moving.
   SphStepReport adapt_now();
 
   SphState<Dim> state() const;
