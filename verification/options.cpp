@@ -101,7 +101,8 @@ SizeList parse_size_list(const std::string& text, const std::string& flag) {
     int n = 0;
     const auto [end, ec] = std::from_chars(part.data(), part.data() + part.size(), n);
     LIQUID_VERIFY(ec == std::errc() && end == part.data() + part.size() && n >= 4 && n <= 1000,
-                  "{} {}: the division {} is out of range (4 to 1000: spacings a/4 to a/1000)", flag, text, part);
+                  "{} {}: the division {} is out of range (4 to 1000: spacings a/4 to a/1000)", flag, text,
+                  part);
     LIQUID_VERIFY(sizes.divisions.empty() || n > sizes.divisions.back(),
                   "{} {}: the divisions must increase (finer sizes last)", flag, text);
     sizes.divisions.push_back(n);
@@ -180,12 +181,14 @@ void add_study_flags(CLI::App& app, StudyFlags& f) {
                  "pool-stability: simulated seconds of every row (0.1 to 3600; default 6, full tier 30)")
       ->check(finite_number)
       ->check(CLI::Range(0.1, 3600.0));
-  app.add_option("--sizes", f.sizes,
-                 "sph-gain-scaling: one dimension and its spacings a/N, as D:N[,N...] (e.g. 3:48; N from 4 to "
-                 "1000, increasing)");
-  app.add_option("--resample-travel", f.resample_travel,
-                 "sph-adaptivity-gain, sph-gain-scaling: resample once the fastest particle may have travelled this "
-                 "many level-0 spacings (0 to 100; 0: every 5th step, the paper's)")
+  app.add_option(
+      "--sizes", f.sizes,
+      "sph-gain-scaling: one dimension and its spacings a/N, as D:N[,N...] (e.g. 3:48; N from 4 to "
+      "1000, increasing)");
+  app.add_option(
+         "--resample-travel", f.resample_travel,
+         "sph-adaptivity-gain, sph-gain-scaling: resample once the fastest particle may have travelled this "
+         "many level-0 spacings (0 to 100; 0: every 5th step, the paper's)")
       ->check(finite_number)
       ->check(CLI::Range(0.0, 100.0));
   app.add_option("--max-cells", f.max_cells, kMaxCellsHelp)->check(CLI::Range(1L, 1'000'000'000'000L));
@@ -194,12 +197,13 @@ void add_study_flags(CLI::App& app, StudyFlags& f) {
 
 CaseOptions case_options(const StudyFlags& f, const CaseInfo& info) {
   std::vector<std::string> refused;
-  for (Option o : {Option::levels,       Option::max_jump,   Option::solver,          Option::stencil,
-                   Option::rbf_exponent, Option::rbf_degree, Option::gradient_degree, Option::stencil_growth,
-                   Option::ring_cap,     Option::rows,       Option::nullspace,       Option::tolerance,
-                   Option::algebraic,    Option::perturb,    Option::trees,           Option::methods,
-                   Option::seed,         Option::particles,  Option::radius,          Option::aspect,
-                   Option::merge_wait,   Option::duration, Option::sizes, Option::resample_travel})
+  for (Option o :
+       {Option::levels,       Option::max_jump,   Option::solver,          Option::stencil,
+        Option::rbf_exponent, Option::rbf_degree, Option::gradient_degree, Option::stencil_growth,
+        Option::ring_cap,     Option::rows,       Option::nullspace,       Option::tolerance,
+        Option::algebraic,    Option::perturb,    Option::trees,           Option::methods,
+        Option::seed,         Option::particles,  Option::radius,          Option::aspect,
+        Option::merge_wait,   Option::duration,   Option::sizes,           Option::resample_travel})
     if (f.given(o) && !info.accepts_option(o)) refused.push_back(flag_of(o));
   if (!refused.empty()) {
     std::vector<std::string> accepted;

@@ -83,14 +83,15 @@ bool face_gradient_weights(const tree::CellGraph<Dim>& graph, const DofLayout<Di
   auto& nodes = scratch.nodes;
   gather_stencil<Dim>(graph, layout, boundary, seeds, at, options.rule, n_target, options.node_cap(n_target),
                       nodes);
-  const rbf::Status st =
-      stencil_weights<Dim>(nodes, at, rbf::Operator<Dim>::partial(g.axis), config, scratch.w, scratch.n_retried,
-                           cache_for<Dim>(nodes, boundary, options.cache_weights ? cache : nullptr),
-                           std::min(graph.cell_size(g.cell[0])[0], graph.cell_size(g.cell[1])[0]));
+  const rbf::Status st = stencil_weights<Dim>(
+      nodes, at, rbf::Operator<Dim>::partial(g.axis), config, scratch.w, scratch.n_retried,
+      cache_for<Dim>(nodes, boundary, options.cache_weights ? cache : nullptr),
+      std::min(graph.cell_size(g.cell[0])[0], graph.cell_size(g.cell[1])[0]));
   LIQUID_VERIFY(st.usable(), "face {} between cells {} and {}: RBF-FD gradient weights unusable: {}", f,
                 g.cell[0], g.cell[1], st.describe());
   if (status) *status = st;
-  for (std::size_t j = 0; j < nodes.size(); ++j) terms.push_back({nodes[j].dof, scratch.w[j], nodes[j].value});
+  for (std::size_t j = 0; j < nodes.size(); ++j)
+    terms.push_back({nodes[j].dof, scratch.w[j], nodes[j].value});
   return true;
 }
 

@@ -148,9 +148,10 @@ IrregularRows parse_irregular_rows(const std::string& name) {
 }
 
 template <int Dim>
-RowKind flux_row(const tree::CellGraph<Dim>& graph, const DofLayout<Dim>& layout, const Boundary<Dim>& boundary,
-                 tree::CellId c, const PoissonOptions& options, rbf::WeightCache<Dim>* cache,
-                 RowScratch<Dim>& scratch, Row& row, rbf::Status& status, std::span<const double> coefficient) {
+RowKind flux_row(const tree::CellGraph<Dim>& graph, const DofLayout<Dim>& layout,
+                 const Boundary<Dim>& boundary, tree::CellId c, const PoissonOptions& options,
+                 rbf::WeightCache<Dim>* cache, RowScratch<Dim>& scratch, Row& row, rbf::Status& status,
+                 std::span<const double> coefficient) {
   const int i = layout.dof_of_cell[c];
   const Vec<Dim> x = graph.centre(c);
   const Vec<Dim> h = graph.cell_size(c);
@@ -163,7 +164,8 @@ RowKind flux_row(const tree::CellGraph<Dim>& graph, const DofLayout<Dim>& layout
       graph.for_each_side_face(c, k, dir, [&](const tree::SideFace& sf) {
         const double a = graph.face_area(sf.face) / volume;
         const bool wall = sf.adjacency == tree::Adjacency::boundary;
-        const double beta = coefficient.empty() || (wall && !boundary.dirichlet_walls) ? 1.0 : coefficient[sf.face];
+        const double beta =
+            coefficient.empty() || (wall && !boundary.dirichlet_walls) ? 1.0 : coefficient[sf.face];
         // Each face adds -a beta dp/dn (outward) to the row: unknowns to the entries, known parts to rhs.
         if (wall) {
           const Vec<Dim> w = graph.face_centre(sf.face);
@@ -191,13 +193,12 @@ RowKind flux_row(const tree::CellGraph<Dim>& graph, const DofLayout<Dim>& layout
         }
         rbf::Status st;
         st.degree_used = options.gradient_degree;
-        const bool any = face_gradient_weights<Dim>(graph, layout, boundary, options, sf.face, cache, scratch,
-                                                    terms, &st);
+        const bool any =
+            face_gradient_weights<Dim>(graph, layout, boundary, options, sf.face, cache, scratch, terms, &st);
         LIQUID_VERIFY(any, "cell {}: face {} has no gradient", c, sf.face);
         if (terms.size() > 2) {
           kind = RowKind::rbf;
-          if (st.condition > status.condition || st.degree_used < status.degree_used ||
-              status.n_nodes == 0)
+          if (st.condition > status.condition || st.degree_used < status.degree_used || status.n_nodes == 0)
             status = st;
         }
         const double scale = dir * a * beta;  // outward = dir x (d/dx_axis)

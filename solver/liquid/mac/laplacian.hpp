@@ -51,9 +51,9 @@ struct PoissonOptions {
   double ring_cap = 0.0;
   /// The most nodes a stencil of `n_target` may keep under the rule (0: no limit).
   int node_cap(int n_target) const;
-  bool regular_fd = true;                ///< plain FD where the neighbourhood is regular
+  bool regular_fd = true;                              ///< plain FD where the neighbourhood is regular
   IrregularRows irregular = IrregularRows::laplacian;  ///< the rows of the other cells (see above)
-  Nullspace nullspace = Nullspace::pin;  ///< for singular (pure Neumann) problems
+  Nullspace nullspace = Nullspace::pin;                ///< for singular (pure Neumann) problems
   /// Share RBF-FD weights between congruent stencils within one assembly (rbf::WeightCache):
   /// T-junctions of one layout repeat across the tree and across levels. Stencils holding an
   /// interface crossing are always solved directly.
@@ -103,9 +103,9 @@ RowKind rbf_row(const tree::CellGraph<Dim>& graph, const DofLayout<Dim>& layout,
 /// 1). `status` receives the weakest RBF-FD weights' status. Returns RowKind::rbf, or RowKind::fd when
 /// no face needed RBF-FD weights.
 template <int Dim>
-RowKind flux_row(const tree::CellGraph<Dim>& graph, const DofLayout<Dim>& layout, const Boundary<Dim>& boundary,
-                 tree::CellId c, const PoissonOptions& options, rbf::WeightCache<Dim>* cache,
-                 RowScratch<Dim>& scratch, Row& row, rbf::Status& status,
+RowKind flux_row(const tree::CellGraph<Dim>& graph, const DofLayout<Dim>& layout,
+                 const Boundary<Dim>& boundary, tree::CellId c, const PoissonOptions& options,
+                 rbf::WeightCache<Dim>* cache, RowScratch<Dim>& scratch, Row& row, rbf::Status& status,
                  std::span<const double> coefficient = {});
 
 }  // namespace liquid::mac

@@ -55,8 +55,8 @@ std::vector<Row> laplacian_rows(const tree::CellGraph<Dim>& graph, const Poisson
         AssemblyStats& s = local.stats;
         if (options.irregular == IrregularRows::flux) {
           rbf::Status st;
-          const RowKind kind = flux_row(graph, sys.layout, sys.boundary, c, options, cache, local.scratch, row, st,
-                                        problem.face_coefficient);
+          const RowKind kind = flux_row(graph, sys.layout, sys.boundary, c, options, cache, local.scratch,
+                                        row, st, problem.face_coefficient);
           if (kind == RowKind::fd) {
             ++s.n_fd_rows;
             return;

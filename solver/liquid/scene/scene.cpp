@@ -658,7 +658,8 @@ void read_pic_solver(const TableReader& r, Scene<Dim>& s) {
     o.poisson.rbf.degree = o.poisson.gradient_degree = static_cast<int>(r.integer_in("ppe_degree", 2, 4));
   // The rows at T-junctions: the paper's RBF-FD Laplacian, or the flux sum of the projection's own
   // face gradients (the PPE then is exactly D G).
-  if (r.has("ppe_rows")) o.poisson.irregular = mac::parse_irregular_rows(r.choice("ppe_rows", {"laplacian", "flux"}));
+  if (r.has("ppe_rows"))
+    o.poisson.irregular = mac::parse_irregular_rows(r.choice("ppe_rows", {"laplacian", "flux"}));
   if (r.has("patch_transfer")) o.uniform_patches = r.choice("patch_transfer", {"apic", "rbf"}) == "apic";
   o.tent_at_level_changes = r.choice("level_change_p2g", {"rbf", "tent"}, std::string("rbf")) == "tent";
   LIQUID_VERIFY(!o.tent_at_level_changes || o.uniform_patches,

@@ -1016,12 +1016,13 @@ void AdaptiveSph<Dim>::restore(SphState<Dim> st) {
   }
   LIQUID_VERIFY(std::isfinite(st.time) && st.time >= 0.0 && st.steps >= 0,
                 "sph: the saved clock is not valid");
-  LIQUID_VERIFY(std::isfinite(st.travel) && st.travel >= 0.0 &&
-                    st.pass_steps.size() <= static_cast<std::size_t>(kPassHistory) &&
-                    std::is_sorted(st.pass_steps.begin(), st.pass_steps.end()) &&
-                    (st.pass_steps.empty() || (st.pass_steps.front() >= 0 && st.pass_steps.back() <= st.steps)),
-                "sph: the saved resampling clock is not valid (travel {}, {} past passes, step {})", st.travel,
-                st.pass_steps.size(), st.steps);
+  LIQUID_VERIFY(
+      std::isfinite(st.travel) && st.travel >= 0.0 &&
+          st.pass_steps.size() <= static_cast<std::size_t>(kPassHistory) &&
+          std::is_sorted(st.pass_steps.begin(), st.pass_steps.end()) &&
+          (st.pass_steps.empty() || (st.pass_steps.front() >= 0 && st.pass_steps.back() <= st.steps)),
+      "sph: the saved resampling clock is not valid (travel {}, {} past passes, step {})", st.travel,
+      st.pass_steps.size(), st.steps);
   std::istringstream text(st.rng);
   std::mt19937_64 rng;
   text >> rng;

@@ -23,8 +23,8 @@ tree::CellGraph<Dim> non_graded(int level) {
   const Box<Dim> domain{Vec<Dim>::Constant(-1.0), Vec<Dim>::Constant(1.0)};
   tree::CellGraphOptions<Dim> options;
   options.max_jump = 2;
-  return tree::narrow_band<Dim>(domain, levelset::sphere<Dim>(Vec<Dim>::Constant(0.1), 0.55), level, level + 2,
-                                2.0, options);
+  return tree::narrow_band<Dim>(domain, levelset::sphere<Dim>(Vec<Dim>::Constant(0.1), 0.55), level,
+                                level + 2, 2.0, options);
 }
 
 template <int Dim>
@@ -44,7 +44,8 @@ PoissonProblem<Dim> problem_on(const tree::CellGraph<Dim>& graph, Outside outsid
     problem.boundary.levelset = blob;
   } else {
     problem.boundary.unknown_cells.assign(graph.cell_capacity(), 0);
-    graph.for_each_cell([&](tree::CellId c) { problem.boundary.unknown_cells[c] = blob(graph.centre(c)) < 0.0; });
+    graph.for_each_cell(
+        [&](tree::CellId c) { problem.boundary.unknown_cells[c] = blob(graph.centre(c)) < 0.0; });
   }
   return problem;
 }
@@ -150,7 +151,8 @@ TEST(FluxRows, AirCellsQuadraticIsExact3D) {
 /// p = sin(2x) cos(y) (+ z^2 in 3D), Dirichlet outside a ball, on a non-graded tree at `level`: the
 /// L-inf error at the unknowns.
 template <int Dim>
-double smooth_error(int level, IrregularRows rows = IrregularRows::flux, Outside outside = Outside::levelset) {
+double smooth_error(int level, IrregularRows rows = IrregularRows::flux,
+                    Outside outside = Outside::levelset) {
   const tree::CellGraph<Dim> graph = non_graded<Dim>(level);
   const auto exact = [](const Vec<Dim>& x) {
     double v = std::sin(2 * x[0]) * std::cos(x[1]);
@@ -168,7 +170,8 @@ double smooth_error(int level, IrregularRows rows = IrregularRows::flux, Outside
     problem.boundary.levelset = blob;
   } else {
     problem.boundary.unknown_cells.assign(graph.cell_capacity(), 0);
-    graph.for_each_cell([&](tree::CellId c) { problem.boundary.unknown_cells[c] = blob(graph.centre(c)) < 0.0; });
+    graph.for_each_cell(
+        [&](tree::CellId c) { problem.boundary.unknown_cells[c] = blob(graph.centre(c)) < 0.0; });
   }
   problem.boundary.dirichlet = exact;
   PoissonOptions o;
@@ -183,8 +186,8 @@ double smooth_error(int level, IrregularRows rows = IrregularRows::flux, Outside
   return err;
 }
 // With air cells (the PIC's free surface) the flux rows converge at second order in 2D and stay within
-// 3x of the RBF-FD Laplacian rows' error in 3D (measured: 0.8-1.0x at levels 2-3, 2.5x at 4). With a level-set
-// surface they are 10-65x less accurate (the ghost-fluid difference towards a cell of another level
+// 3x of the RBF-FD Laplacian rows' error in 3D (measured: 0.8-1.0x at levels 2-3, 2.5x at 4). With a
+// level-set surface they are 10-65x less accurate (the ghost-fluid difference towards a cell of another level
 // runs along a slanted segment), which is why scenes refuse that pair.
 TEST(FluxRows, SmoothSolutionConverges2D) {
   const double e5 = smooth_error<2>(5, IrregularRows::flux, Outside::air_cells);

@@ -44,13 +44,14 @@ namespace {
 
 constexpr double kDepth = 0.3, kGravity = 9.81;
 
-const FlowMethod kMethods[] = {{"adaptive-rbf", true, pic::PicTransfer::rbf},
-                               {"adaptive-rbf-everywhere", true, pic::PicTransfer::rbf, false, true},
-                               {"adaptive-rbf-tent", true, pic::PicTransfer::rbf, false, false, true},
-                               {"adaptive-rbf-ppe3", true, pic::PicTransfer::rbf, false, false, false, 3},
-                               {"adaptive-rbf-flux", true, pic::PicTransfer::rbf, false, false, false, 0, true},
-                               {"adaptive-rbf-paper", true, pic::PicTransfer::rbf, true},
-                               {"regular-apic", false, pic::PicTransfer::apic}};
+const FlowMethod kMethods[] = {
+    {"adaptive-rbf", true, pic::PicTransfer::rbf},
+    {"adaptive-rbf-everywhere", true, pic::PicTransfer::rbf, false, true},
+    {"adaptive-rbf-tent", true, pic::PicTransfer::rbf, false, false, true},
+    {"adaptive-rbf-ppe3", true, pic::PicTransfer::rbf, false, false, false, 3},
+    {"adaptive-rbf-flux", true, pic::PicTransfer::rbf, false, false, false, 0, true},
+    {"adaptive-rbf-paper", true, pic::PicTransfer::rbf, true},
+    {"regular-apic", false, pic::PicTransfer::apic}};
 
 struct Tank {
   const char* name;
@@ -142,7 +143,8 @@ void study(const Tank& tank, const std::vector<FlowMethod>& methods, Table& tabl
         o.seconds_per_step);
     std::fflush(stdout);
     table.add_row({long(Dim), std::string(tank.name), long(tank.finest), std::string(m.name), o.steps,
-                   tank.end, o.largest, o.last, o.rate, o.rate_error, doubling, o.divergence, o.seconds_per_step});
+                   tank.end, o.largest, o.last, o.rate, o.rate_error, doubling, o.divergence,
+                   o.seconds_per_step});
     for (int k = 1; k <= 10; ++k) {
       const std::size_t i = std::min(o.t.size() - 1, o.t.size() * k / 10);
       series.add_row(
@@ -183,8 +185,9 @@ CaseResult run(const CaseOptions& options) {
   Table series("over time", {"dim", "tank", "finest", "method", "t", "max |v_p| / sqrt(gH)"});
   std::vector<FlowMethod> methods = chosen_methods(kMethods, options.methods);
   if (!options.full && options.methods.empty())  // the quick tier leaves the full tier's comparison row out
-    std::erase_if(methods,
-                  [](const FlowMethod& m) { return m.everywhere || m.tent || m.ppe_degree > 0 || m.flux_rows; });
+    std::erase_if(methods, [](const FlowMethod& m) {
+      return m.everywhere || m.tent || m.ppe_degree > 0 || m.flux_rows;
+    });
   const LevelRange levels = options.levels.value_or(options.full ? LevelRange{4, 5} : LevelRange{4, 4});
   LIQUID_VERIFY(levels.first >= 3 && levels.last <= 6,
                 "pool-stability: --levels {}:{} is outside 3:6 (finest levels; the interior is two coarser)",

@@ -25,8 +25,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <optional>
 #include <cstdint>
+#include <optional>
 
 #include <fmt/format.h>
 
@@ -133,9 +133,10 @@ CaseResult run_case(double s, int seeds, const std::string& tag, Json& series, i
   std::vector<Run> runs;
   for (int k = 0; k < seeds; ++k) runs.push_back(run_dam<Dim>(true, s, 1 + k, merge_wait, travel));
   if (travel)
-    result.notes.push_back(fmt::format("{}both runs resample once the fastest particle may have travelled {:g} "
-                                       "spacings (--resample-travel; 0: every 5th step, the paper's)",
-                                       tag, *travel));
+    result.notes.push_back(
+        fmt::format("{}both runs resample once the fastest particle may have travelled {:g} "
+                    "spacings (--resample-travel; 0: every 5th step, the paper's)",
+                    tag, *travel));
   if (merge_wait > 0)
     result.notes.push_back(
         fmt::format("{}a split's children wait {} resampling passes before they may merge "

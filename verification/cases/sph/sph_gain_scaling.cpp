@@ -177,10 +177,11 @@ CaseResult run_full(const CaseOptions& options) {
     // with its neighbour lists, so 4M is what this machine's memory allows beside the adaptive run.
     const long n = sizes.divisions.back();
     const long single = sizes.dim == 2 ? 2 * n * n : 4 * n * n * n;
-    LIQUID_VERIFY(single <= 4'000'000,
-                  "--sizes {}:{}: a/{} needs {} single-resolution particles, over the 4000000 this case allows "
-                  "(3D up to a/100, 2D up to a/1000)",
-                  sizes.dim, n, n, single);
+    LIQUID_VERIFY(
+        single <= 4'000'000,
+        "--sizes {}:{}: a/{} needs {} single-resolution particles, over the 4000000 this case allows "
+        "(3D up to a/100, 2D up to a/1000)",
+        sizes.dim, n, n, single);
     const int steps = sizes.dim == 2 ? 80 : 40;
     if (sizes.dim == 2)
       study<2>(result, sizes.divisions, steps, options.resample_travel);
@@ -199,6 +200,8 @@ LIQUID_VERIFICATION_CASE(
     {"sph-gain-scaling",
      "SPH dam break start, single against adaptive at 2D s = a/20..a/320 and 3D s = a/16..a/80: memory and "
      "speed gains against resolution, extrapolated to the target (4x fewer particles, 3x faster)",
-     false, run_full, {Option::sizes, Option::resample_travel}});
+     false,
+     run_full,
+     {Option::sizes, Option::resample_travel}});
 
 }  // namespace liquid::verification
