@@ -27,6 +27,15 @@ tree::CellId pin_cell(const tree::CellGraph<Dim>& graph, const DofLayout<Dim>& l
   return pinned;
 }
 
+/// Adds a row that used RBF-FD weights (their weakest status `st`) to the statistics.
+void count_rbf_row(AssemblyStats& s, const rbf::Status& st, tree::CellId c) {
+  ++s.n_rbf_rows;
+  if (st.info == rbf::Info::degree_reduced) ++s.n_degree_reduced;
+  s.min_degree = std::min(s.min_degree, st.degree_used);
+  s.max_stencil = std::max(s.max_stencil, st.n_nodes);
+  if (st.condition > s.worst_condition) s.worst_condition = st.condition, s.worst_condition_cell = c;
+}
+
 /// Every row of -Lap p = -f, in parallel; the row statistics go to `stats`.
 template <int Dim>
 std::vector<Row> laplacian_rows(const tree::CellGraph<Dim>& graph, const PoissonSystem<Dim>& sys,
@@ -61,11 +70,7 @@ std::vector<Row> laplacian_rows(const tree::CellGraph<Dim>& graph, const Poisson
             ++s.n_fd_rows;
             return;
           }
-          ++s.n_rbf_rows;
-          if (st.info == rbf::Info::degree_reduced) ++s.n_degree_reduced;
-          s.min_degree = std::min(s.min_degree, st.degree_used);
-          s.max_stencil = std::max(s.max_stencil, st.n_nodes);
-          if (st.condition > s.worst_condition) s.worst_condition = st.condition, s.worst_condition_cell = c;
+          count_rbf_row(s, st, c);
           return;
         }
         if (options.regular_fd && regular_neighbourhood(graph, c)) {
@@ -87,11 +92,7 @@ std::vector<Row> laplacian_rows(const tree::CellGraph<Dim>& graph, const Poisson
           ++s.n_on_interface;
           return;
         }
-        ++s.n_rbf_rows;
-        if (st.info == rbf::Info::degree_reduced) ++s.n_degree_reduced;
-        s.min_degree = std::min(s.min_degree, st.degree_used);
-        s.max_stencil = std::max(s.max_stencil, st.n_nodes);
-        if (st.condition > s.worst_condition) s.worst_condition = st.condition, s.worst_condition_cell = c;
+        count_rbf_row(s, st, c);
       },
       [&](Local& local) {
         const AssemblyStats& s = local.stats;
