@@ -159,14 +159,22 @@ void echo_sph(const scene::Scene<Dim>& s, const scene::RunSettings& settings, bo
   fmt::print("  container   [{}] to [{}]\n",
              fmt::join(o.container.lo.data(), o.container.lo.data() + Dim, ", "),
              fmt::join(o.container.hi.data(), o.container.hi.data() + Dim, ", "));
-  fmt::print("  particles   spacing {:.4g} m (support radius {:.4g}), {}\n", o.spacing, o.h_ratio * o.spacing,
-             o.adaptive ? fmt::format("adaptive, levels 0-{} (alpha {}, beta {}), resampled every {} steps{}",
-                                      o.max_level, o.resampling.alpha, o.resampling.beta, o.resample_every,
+  const std::string cadence =
+      o.resample_travel > 0.0
+          ? fmt::format(
+                "{} at least {} steps apart, once the fastest particle may have travelled {:g} spacings",
+                o.adaptive ? "resampled" : "redistanced", o.resample_every, o.resample_travel)
+          : fmt::format("{} every {} steps", o.adaptive ? "resampled" : "redistanced", o.resample_every);
+  fmt::print("  particles   spacing {:.4g} m (support radius {:.4g}), {}; {}\n", o.spacing,
+             o.h_ratio * o.spacing,
+             o.adaptive ? fmt::format("adaptive, levels 0-{} (alpha {}, beta {}){}", o.max_level,
+                                      o.resampling.alpha, o.resampling.beta,
                                       o.merge_min_passes > 0
                                           ? fmt::format(", a split's children kept {} passes before a merge",
                                                         o.merge_min_passes)
                                           : "")
-                        : std::string("single resolution (level 0 only)"));
+                        : std::string("single resolution (level 0 only)"),
+             cadence);
   fmt::print("  fluid       rho_0 {} kg/m^{}, sound speed {:.3g} m/s{}, viscosity {} Pa s\n",
              o.fluid.rest_density, Dim, scene::sph_sound_speed<Dim>(s),
              sc.sound_speed > 0 ? "" : " (10x the fastest expected speed)", o.fluid.viscosity);

@@ -4,7 +4,9 @@
 // Problem. A water column a wide and 2a high (a = 0.2 m; Martin and Moyce's n^2 = 2) in the corner of
 // a tank [0, 5a] x [0, 3a] (3D: 2a deep, the column filling the depth), settled behind a gate for
 // 0.2 s (AdaptiveSph::relax), released at t = 0 and run to T = t sqrt(2g/a) = 3, by
-//   single: all particles at level 0, spacing s;   adaptive: levels 0..3, resampled every 5 steps.
+//   single: all particles at level 0, spacing s;   adaptive: levels 0..3,
+// both with the default passes (once the fastest particle may have travelled half a spacing;
+// --resample-travel 0: the paper's every 5th step).
 // Quick tier: 2D, s = a/20 (800 particles). Full tier (sph-adaptivity-gain-full): 2D s = a/80
 // (12800) and 3D s = a/16.
 // Measured: particles over the run (mean, and its ratio single / adaptive: the memory gain), seconds a
