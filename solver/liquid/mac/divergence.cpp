@@ -19,17 +19,19 @@ std::vector<double> fv_divergence(const tree::CellGraph<Dim>& graph, const std::
   std::vector<double> div(graph.cell_capacity(), std::numeric_limits<double>::quiet_NaN());
   const std::vector<tree::CellId> cells = graph.cell_ids();
 #pragma omp parallel for schedule(static) if (cells.size() > 8192)
-  for (std::size_t i = 0; i < cells.size(); ++i) {
-    const tree::CellId c = cells[i];
-    double flux = 0.0;
-    for (tree::FaceId f : graph.faces(c)) {
-      const tree::GraphFace& g = graph.face(f);
-      const double sign = g.cell[0] == c ? 1.0 : -1.0;  // c below the face: outward normal is +axis
-      flux += sign * u[f] * graph.face_area(f);
-    }
-    div[c] = flux / graph.volume(c);
-  }
+  for (std::size_t i = 0; i < cells.size(); ++i) div[cells[i]] = fv_divergence_at<Dim>(graph, u, cells[i]);
   return div;
+}
+
+template <int Dim>
+double fv_divergence_at(const tree::CellGraph<Dim>& graph, std::span<const double> u, tree::CellId c) {
+  double flux = 0.0;
+  for (tree::FaceId f : graph.faces(c)) {
+    const tree::GraphFace& g = graph.face(f);
+    const double sign = g.cell[0] == c ? 1.0 : -1.0;  // c below the face: outward normal is +axis
+    flux += sign * u[f] * graph.face_area(f);
+  }
+  return flux / graph.volume(c);
 }
 
 template <int Dim>
@@ -86,6 +88,8 @@ std::vector<double> rbf_divergence(const tree::CellGraph<Dim>& graph, const std:
   return div;
 }
 
+template double fv_divergence_at<2>(const tree::CellGraph<2>&, std::span<const double>, tree::CellId);
+template double fv_divergence_at<3>(const tree::CellGraph<3>&, std::span<const double>, tree::CellId);
 template std::vector<double> fv_divergence<2>(const tree::CellGraph<2>&, const std::vector<double>&);
 template std::vector<double> fv_divergence<3>(const tree::CellGraph<3>&, const std::vector<double>&);
 template std::vector<double> rbf_divergence<2>(const tree::CellGraph<2>&, const std::vector<double>&,

@@ -6,6 +6,7 @@
 //     k-normal velocities at nearby face centres (faces of the cell's 1-ring, grown to the 2-ring
 //     when too few), summed over k. Not conservative in general.
 
+#include <span>
 #include <vector>
 
 #include "liquid/rbf/weights.hpp"
@@ -17,6 +18,9 @@ namespace liquid::mac {
 /// Returns the divergence per cell id (NaN for dead ids).
 template <int Dim>
 std::vector<double> fv_divergence(const tree::CellGraph<Dim>& graph, const std::vector<double>& u);
+/// The same at one cell c.
+template <int Dim>
+double fv_divergence_at(const tree::CellGraph<Dim>& graph, std::span<const double> u, tree::CellId c);
 
 /// The RBF-FD divergence; throws liquid::Error naming the cell when a stencil has no usable weights.
 template <int Dim>

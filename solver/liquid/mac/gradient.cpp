@@ -17,44 +17,32 @@ std::vector<double> face_normal_derivative(const tree::CellGraph<Dim>& graph, co
                 p.size(), layout.n_unknowns());
   std::vector<double> out(graph.face_capacity(), std::numeric_limits<double>::quiet_NaN());
   const std::vector<tree::FaceId> faces = graph.face_ids();
-  rbf::Config config = options.rbf;
-  config.degree = options.gradient_degree;
-  const int n_target = stencil_size(Dim, config.degree, options.growth);
-  const int n_cap = options.node_cap(n_target);
   rbf::WeightCache<Dim> weight_cache;
-  rbf::WeightCache<Dim>* const cache = options.cache_weights ? (shared ? shared : &weight_cache) : nullptr;
+  rbf::WeightCache<Dim>* const cache = shared ? shared : &weight_cache;
+  struct Scratch {
+    RowScratch<Dim> row;
+    std::vector<FaceGradientTerm<Dim>> terms;
+  };
   parallel_for(
-      static_cast<long>(faces.size()), [] { return RowScratch<Dim>{}; },
-      [&](RowScratch<Dim>& scratch, long q) {
+      static_cast<long>(faces.size()), [] { return Scratch{}; },
+      [&](Scratch& scratch, long q) {
         const tree::FaceId f = faces[q];
+        auto& terms = scratch.terms;
+        if (!face_gradient_weights<Dim>(graph, layout, boundary, options, f, cache, scratch.row, terms))
+          return;
+        const auto value = [&](const FaceGradientTerm<Dim>& t) {
+          return (t.dof >= 0 ? p[t.dof] : 0.0) + t.value;
+        };
         const tree::GraphFace& g = graph.face(f);
-        if (g.is_boundary()) return;
-        const int ia = layout.dof_of_cell[g.cell[0]], ib = layout.dof_of_cell[g.cell[1]];
-        if (ia < 0 && ib < 0) return;
-        if ((ia < 0 || ib < 0) && !boundary.air_cells()) return;
-        if (!g.hanging() && g.side_level[0] == g.side_level[1]) {
-          // An air side carries its Dirichlet value at its centre.
-          const double pa = ia >= 0 ? p[ia] : boundary.dirichlet(graph.centre(g.cell[0]));
-          const double pb = ib >= 0 ? p[ib] : boundary.dirichlet(graph.centre(g.cell[1]));
-          out[f] = (pb - pa) / graph.cell_size(g.cell[0])[g.axis];
+        if (!g.hanging() && g.side_level[0] == g.side_level[1]) {  // two-point, as a difference
+          out[f] = (value(terms[1]) - value(terms[0])) / graph.cell_size(g.cell[0])[g.axis];
           return;
         }
-        const Vec<Dim> at = graph.face_centre(f);
-        const tree::CellId seeds[2] = {g.cell[0], g.cell[1]};
-        auto& nodes = scratch.nodes;
-        gather_stencil<Dim>(graph, layout, boundary, seeds, at, options.rule, n_target, n_cap, nodes);
-        const rbf::Status st =
-            stencil_weights<Dim>(nodes, at, rbf::Operator<Dim>::partial(g.axis), config, scratch.w,
-                                 scratch.n_retried, cache_for<Dim>(nodes, boundary, cache),
-                                 std::min(graph.cell_size(g.cell[0])[0], graph.cell_size(g.cell[1])[0]));
-        LIQUID_VERIFY(st.usable(), "face {} between cells {} and {}: RBF-FD gradient weights unusable: {}", f,
-                      g.cell[0], g.cell[1], st.describe());
         double v = 0.0;
-        for (std::size_t j = 0; j < nodes.size(); ++j)
-          v += scratch.w[j] * ((nodes[j].dof >= 0 ? p[nodes[j].dof] : 0.0) + nodes[j].value);
+        for (const FaceGradientTerm<Dim>& t : terms) v += t.weight * value(t);
         out[f] = v;
       },
-      [](RowScratch<Dim>&) {});
+      [](Scratch&) {});
   return out;
 }
 

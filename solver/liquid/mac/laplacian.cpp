@@ -181,14 +181,10 @@ RowKind flux_row(const tree::CellGraph<Dim>& graph, const DofLayout<Dim>& layout
         const int j = layout.dof_of_cell[sf.neighbour];
         if (j < 0 && !boundary.air_cells()) {
           // Ghost fluid towards the crossing, as the projection forms this face's gradient.
-          const Vec<Dim> y = graph.centre(sf.neighbour);
-          const auto cut =
-              levelset::crossing<Dim>(boundary.levelset, x, y, boundary.levelset(x), boundary.levelset(y));
-          LIQUID_VERIFY(cut.has_value(), "cell {}: no interface crossing towards outside neighbour {}", c,
-                        sf.neighbour);
-          const double g = a * beta / (std::max(cut->theta, 1e-3) * std::abs(y[k] - x[k]));
+          const GhostFace ghost = ghost_face<Dim>(boundary, x, graph.centre(sf.neighbour), k);
+          const double g = a * beta / ghost.distance;
           diag += g;
-          row.rhs += g * boundary.dirichlet(cut->point);
+          row.rhs += g * ghost.value;
           return;
         }
         rbf::Status st;

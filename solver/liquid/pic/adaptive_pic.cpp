@@ -655,8 +655,7 @@ void AdaptivePic<Dim>::fold_solid_rows() {
 template <int Dim>
 void AdaptivePic<Dim>::interface_gradients(double, std::vector<double>& dn) const {
   // A face between an unknown and a cell outside the liquid: the ghost-fluid gradient from p = 0
-  // at the interface crossing, dp/dn = (0 - p_in) / (theta d) towards the outside (Gibou et al.
-  // 2002), d the distance between the centres along the axis. Second order in the surface position.
+  // at the interface crossing (mac::ghost_face). Second order in the surface position.
   const auto& layout = system_.layout;
   const linalg::Vector& p = system_.b;
   graph_.for_each_face([&](tree::FaceId f) {
@@ -665,14 +664,11 @@ void AdaptivePic<Dim>::interface_gradients(double, std::vector<double>& dn) cons
     const int i0 = layout.dof_of_cell[g.cell[0]], i1 = layout.dof_of_cell[g.cell[1]];
     if ((i0 >= 0) == (i1 >= 0)) return;
     const int in = i0 >= 0 ? 0 : 1;
-    const Vec<Dim> a = graph_.centre(g.cell[in]), b = graph_.centre(g.cell[1 - in]);
-    const double phi_a = system_.boundary.levelset(a), phi_b = system_.boundary.levelset(b);
-    const auto cut = levelset::crossing<Dim>(system_.boundary.levelset, a, b, phi_a, phi_b);
-    const double theta = cut ? std::max(cut->theta, 1e-3) : 1.0;
-    const double d = std::abs(b[g.axis] - a[g.axis]);
+    const mac::GhostFace ghost = mac::ghost_face<Dim>(system_.boundary, graph_.centre(g.cell[in]),
+                                                      graph_.centre(g.cell[1 - in]), g.axis);
     const double p_in = p[in == 0 ? i0 : i1];
     // Along +axis: from cell[0] to cell[1].
-    const double towards_outside = (0.0 - p_in) / (theta * d);
+    const double towards_outside = (ghost.value - p_in) / ghost.distance;
     dn[f] = in == 0 ? towards_outside : -towards_outside;
   });
 }
@@ -936,9 +932,9 @@ PicStepReport AdaptivePic<Dim>::advance(double dt) {
       r.grid_energy_before = grid_energy();
       r.pressure_work = project(dt);
       r.grid_energy_after = grid_energy();
-      const std::vector<double> div = mac::fv_divergence<Dim>(graph_, u_);
       for (tree::CellId c : cls_.fluid)
-        r.divergence_after = std::max(r.divergence_after, std::abs(div[c]) * graph_.cell_size(c)[0]);
+        r.divergence_after = std::max(
+            r.divergence_after, std::abs(mac::fv_divergence_at<Dim>(graph_, u_, c)) * graph_.cell_size(c)[0]);
     });
     phase("extrapolate", [&] { extrapolate(); });
     phase("g2p", [&] { to_particles(r); });

@@ -274,16 +274,9 @@ SphSceneRunner<Dim> SphSceneRunner<Dim>::resume(const std::string& checkpoint, R
   st.time = r.scalar_double("sph/time");
   st.steps = r.scalar_int("sph/step");
   st.rng = r.string("sph/rng");
-  if (r.has("sph/travel")) {
+  if (r.has("sph/travel")) {  // absent before the travel rule: the next step then passes
     st.travel = r.scalar_double("sph/travel");
     st.pass_steps = r.int64s("sph/pass_steps");
-  } else {  // saved before the travel rule: the fixed cadence's passes
-    const long every = scene.sph_scene.options.resample_every;
-    std::vector<std::int64_t> back;  // newest first
-    for (long k = st.steps > 0 ? (st.steps - 1) - (st.steps - 1) % every : -1;
-         k >= 0 && back.size() < static_cast<std::size_t>(sph::kPassHistory); k -= every)
-      back.push_back(k);
-    st.pass_steps.assign(back.rbegin(), back.rend());
   }
 
   SphSceneRunner run(std::move(scene), std::move(settings), false);
