@@ -49,7 +49,8 @@ struct RunFailure {
 
 /// The last lines of the echo: when the run ends, what it writes, the threads.
 void echo_time_and_output(const scene::SceneTime& time, const scene::SceneOutput& output,
-                          const scene::RunSettings& settings, const char* cfl_note) {
+                          const scene::RunSettings& settings, const char* cfl_note,
+                          const std::string& threads_note = "") {
   if (time.steps >= 0)
     fmt::print("  time        {} steps", time.steps);
   else
@@ -65,7 +66,7 @@ void echo_time_and_output(const scene::SceneTime& time, const scene::SceneOutput
                settings.checkpoint_every > 0
                    ? fmt::format(", a checkpoint every {} steps", settings.checkpoint_every)
                    : "");
-  fmt::print("  threads     {}\n", thread_summary());
+  fmt::print("  threads     {}{}\n", thread_summary(), threads_note);
   std::fflush(stdout);
 }
 
@@ -190,7 +191,9 @@ void echo_sph(const scene::Scene<Dim>& s, const scene::RunSettings& settings, bo
                  : "");
   if (sc.settle > 0)
     fmt::print("  settle      {} s before t = 0{}\n", sc.settle, sc.gate ? ", held behind the gate" : "");
-  echo_time_and_output(s.time, s.output, settings, " (of the sound speed)");
+  echo_time_and_output(
+      s.time, s.output, settings, " (of the sound speed)",
+      o.serial_below > 0 ? fmt::format("; a step with fewer than {} particles on one thread", o.serial_below) : "");
 }
 
 /// One line of progress: a bar on a terminal (rewritten in place), plain lines otherwise.

@@ -10,6 +10,10 @@
 #include <mutex>
 #include <utility>
 
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
 namespace liquid {
 
 /// The first exception thrown by any of a parallel loop's iterations.
@@ -68,5 +72,30 @@ void parallel_for(long n, Body&& body, int chunk = 64, long serial_below = 0) {
   parallel_for(
       n, [] { return None{}; }, [&](None&, long i) { body(i); }, [](None&) {}, chunk, serial_below);
 }
+
+/// While it lives, the parallel loops its thread starts run on one thread when `serial` is true; the
+/// thread count comes back when it ends. For steps too small to pay for waking a second thread.
+class SerialScope {
+ public:
+  explicit SerialScope(bool serial) {
+#ifdef _OPENMP
+    if (!serial) return;
+    before_ = omp_get_max_threads();
+    omp_set_num_threads(1);
+#else
+    (void)serial;
+#endif
+  }
+  ~SerialScope() {
+#ifdef _OPENMP
+    if (before_ > 0) omp_set_num_threads(before_);
+#endif
+  }
+  SerialScope(const SerialScope&) = delete;
+  SerialScope& operator=(const SerialScope&) = delete;
+
+ private:
+  int before_ = 0;
+};
 
 }  // namespace liquid

@@ -304,6 +304,7 @@ const std::vector<std::string> sph_keys = {"spacing",
                                            "resample_every",
                                            "resample_travel",
                                            "merge_min_passes",
+                                           "serial_below",
                                            "alpha",
                                            "beta",
                                            "kernel",
@@ -367,6 +368,7 @@ void read_sph(const TableReader& r, Scene<Dim>& s) {
                 "{}: {} is outside [0, 100] (level-0 spacings; 0: every resample_every-th step)",
                 r.where("resample_travel"), o.resample_travel);
   o.merge_min_passes = static_cast<int>(r.integer_in("merge_min_passes", 0, 1000, o.merge_min_passes));
+  o.serial_below = static_cast<int>(r.integer_in("serial_below", 0, 100'000'000, o.serial_below));
   o.resampling.alpha = r.positive("alpha", o.resampling.alpha);
   o.resampling.beta = r.positive("beta", o.resampling.beta);
   LIQUID_VERIFY(o.resampling.alpha < o.resampling.beta, "{}: alpha {} must be below beta {}", r.where("beta"),

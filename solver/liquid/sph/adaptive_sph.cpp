@@ -11,6 +11,7 @@
 #include <fmt/ranges.h>
 
 #include "liquid/core/error.hpp"
+#include "liquid/core/parallel.hpp"
 #include "liquid/sph/kernels.hpp"
 
 namespace liquid::sph {
@@ -80,6 +81,8 @@ void SphOptions<Dim>::check() const {
   LIQUID_VERIFY(resample_every >= 1, "sph: resample_every must be at least 1, not {}", resample_every);
   LIQUID_VERIFY(std::isfinite(resample_travel) && resample_travel >= 0.0 && resample_travel <= 100.0,
                 "sph: resample_travel must be within [0, 100] spacings, not {}", resample_travel);
+  LIQUID_VERIFY(serial_below >= 0 && serial_below <= 100'000'000,
+                "sph: serial_below must be within 0..100000000 particles, not {}", serial_below);
   LIQUID_VERIFY(merge_min_passes >= 0 && merge_min_passes <= 1000,
                 "sph: merge_min_passes must be within 0..1000, not {}", merge_min_passes);
   LIQUID_VERIFY(resampling.alpha > 0.0 && resampling.beta > resampling.alpha,
@@ -756,6 +759,7 @@ template <int Dim>
 SphStepReport AdaptiveSph<Dim>::advance(double dt) {
   LIQUID_VERIFY(dt > 0.0 && std::isfinite(dt), "sph: the time step must be positive and finite, not {}", dt);
   auto total = timer_.scope("total");
+  const SerialScope one_thread(p_.size() < options_.serial_below);
   const bool resampling = resampling_due();
   SphStepReport report;
   const auto phase = [this](const char* name, auto&& body) {

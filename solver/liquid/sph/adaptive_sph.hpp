@@ -143,6 +143,10 @@ struct SphOptions {
   /// footpoints where the fixed point is not unique, which changes the resampling, and they pay only
   /// on large particle sets. Why: docs/findings/sph.md.
   MarchOrder march = MarchOrder::serial;
+  /// A step with fewer particles than this runs on one thread (0: every step on all threads). Below
+  /// it a step's parallel loops are too short to pay for a second thread, and on a machine with other
+  /// load they lose to one. Same bits either way. Why this default: docs/findings/sph.md.
+  int serial_below = 1000;
   double restitution = 0.0;  ///< normal velocity kept (reversed) at a wall
   std::uint64_t seed = 1;    ///< the split directions' random stream
   std::vector<SphSource<Dim>> sources;

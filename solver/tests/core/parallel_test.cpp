@@ -1,8 +1,10 @@
 // The parallel loop helper: every index once, per-thread state merged, and the first failure
 // rethrown with its type after the threads join.
 #include <gtest/gtest.h>
+#include <omp.h>
 
 #include <new>
+#include <stdexcept>
 #include <vector>
 
 #include "liquid/core/error.hpp"
@@ -52,3 +54,36 @@ TEST(ParallelFor, KeepsBadAllocAnInternalError) {
 
 }  // namespace
 }  // namespace liquid
+
+/// SerialScope(true) runs the parallel regions its thread starts on one thread and gives the thread
+/// count back when it ends, also when it ends by an exception; SerialScope(false) changes nothing.
+TEST(SerialScope, RunsOnOneThreadWhileItLivesAndRestoresTheCount) {
+  const int before = omp_get_max_threads();
+  omp_set_num_threads(2);
+  const auto threads_in_a_region = [] {
+    int n = 0;
+#pragma omp parallel
+    {
+#pragma omp single
+      n = omp_get_num_threads();
+    }
+    return n;
+  };
+  ASSERT_EQ(threads_in_a_region(), 2) << "the test needs two threads outside the scope";
+  {
+    const liquid::SerialScope scope(true);
+    EXPECT_EQ(threads_in_a_region(), 1);
+  }
+  EXPECT_EQ(threads_in_a_region(), 2);
+  {
+    const liquid::SerialScope scope(false);
+    EXPECT_EQ(threads_in_a_region(), 2);
+  }
+  try {
+    const liquid::SerialScope scope(true);
+    throw std::runtime_error("leaves the scope");
+  } catch (const std::runtime_error&) {
+  }
+  EXPECT_EQ(omp_get_max_threads(), 2);
+  omp_set_num_threads(before);
+}
