@@ -29,7 +29,7 @@ PAPER = {
                    "redistancing": (2.9, 13.9), "elfs": (2.6, None), "resampling": (4.5, None), "gain": (4.5, 4.3)},
 }
 # Our scene standing for each of the paper's examples.
-COUNTERPART = {"sph-dam-break-2d": "flooding", "sph-dam-break-3d": "flooding", "sph-desk-toy-2d": "desk toy",
+COUNTERPART = {"sph-dam-break-2d": "flooding", "sph-dam-break-3d": "flooding", "sph-dam-break-3d-a32": "flooding", "sph-desk-toy-2d": "desk toy",
                "sph-pour-2d": "teapot"}
 # The paper's phases and ours: projection = integrate + collisions.
 PHASES = [("neighbourhood", ("neighbours",)), ("forces", ("forces",)), ("projection", ("integrate", "collisions")),
