@@ -5,6 +5,7 @@
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
+#include <random>
 
 #include "liquid/rbf/weight_cache.hpp"
 #include "liquid/rbf/weights.hpp"
@@ -75,6 +76,34 @@ void BM_WeightsCached(benchmark::State& state) {
       static_cast<double>(cache.hits()) / std::max(1L, cache.hits() + cache.misses());
 }
 
+/// The particle -> face transfer's solve: value weights of PHS r^3 + degree 1 (the default transfer)
+/// on `n` scattered nodes around a face centre (at most 16 in 3D: the node cap).
+template <int Dim>
+void BM_ValueWeights(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::vector<std::vector<Vec<Dim>>> stencils(64);
+  for (auto& nodes : stencils)
+    for (int i = 0; i < n; ++i) {
+      Vec<Dim> x;
+      for (int k = 0; k < Dim; ++k) x[k] = u(rng);
+      nodes.push_back(x);
+    }
+  rbf::Config config{3, 1};
+  config.condition_estimate = rbf::ConditionEstimate::probes;
+  std::vector<double> w;
+  std::size_t i = 0;
+  for (auto _ : state) {
+    const auto st = rbf::value_weights<Dim>(stencils[i++ % stencils.size()], Vec<Dim>::Zero(), config, w);
+    benchmark::DoNotOptimize(st);
+    benchmark::DoNotOptimize(w.data());
+  }
+  state.SetItemsProcessed(state.iterations());
+}
+
+BENCHMARK(BM_ValueWeights<2>)->Arg(8)->Arg(12);
+BENCHMARK(BM_ValueWeights<3>)->Arg(8)->Arg(16);
 BENCHMARK(BM_WeightsUncached<2>)->Arg(9)->Arg(13)->Arg(17)->Arg(21)->Arg(25);
 BENCHMARK(BM_WeightsCached<2>)->Arg(9)->Arg(13)->Arg(17)->Arg(21)->Arg(25);
 BENCHMARK(BM_WeightsUncached<3>)->Arg(19)->Arg(27)->Arg(33)->Arg(40)->Arg(48);

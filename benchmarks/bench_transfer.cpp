@@ -8,13 +8,15 @@
 // (paper), 1 cubic mls, 2 linear fit, 3 PIC (multilinear), 4 APIC, 5 rbf with each cell's own
 // factorisation (share_factors = false; face -> particle only), 6 rbf with the full Hager-Higham
 // condition estimate (particle -> face only; the default takes two probes), 7 and 8 PIC and APIC
-// as a gather (particle -> face only; the scatter's reference).
+// as a gather (particle -> face only; the scatter's reference), 9 and 10 APIC through the adaptive
+// solver's uniform patches (particle -> face only; the tree is one patch), as a scatter and a gather.
 #include <benchmark/benchmark.h>
 
 #include <memory>
 #include <random>
 
 #include "liquid/particles/seeding.hpp"
+#include "liquid/transfer/patches.hpp"
 #include "liquid/transfer/regular.hpp"
 #include "liquid/transfer/scattered.hpp"
 #include "liquid/tree/builders.hpp"
@@ -24,18 +26,20 @@ namespace {
 
 const char* kMethodNames[] = {
     "rbf",         "mls",         "linear", "pic", "apic", "rbf, own factors", "rbf, full condition estimate",
-    "pic, gather", "apic, gather"};
+    "pic, gather", "apic, gather", "apic, patches", "apic, patches, gather"};
 
 template <int Dim>
 struct Scene {
   tree::CellGraph<Dim> graph;
   std::unique_ptr<transfer::RegularLattice<Dim>> lattice;
+  std::unique_ptr<transfer::UniformPatches<Dim>> patches;
   particles::Particles<Dim> particles;
   particles::CellBins bins;
   transfer::FaceValues faces;
 
   Scene() : graph(tree::uniform<Dim>(Box<Dim>{}, Dim == 2 ? 8 : 5)) {
     lattice = std::make_unique<transfer::RegularLattice<Dim>>(graph);
+    patches = std::make_unique<transfer::UniformPatches<Dim>>(graph, graph.cell_ids());
     particles::SeedOptions o;
     o.jitter = 0.5;
     particles::seed_region<Dim>(
@@ -79,10 +83,18 @@ void BM_ToFaces(benchmark::State& state) {
       transfer::linear_to_faces<Dim>(
           s.graph, *s.lattice, s.particles, s.bins,
           method == 3 ? transfer::RegularScheme::pic : transfer::RegularScheme::apic, {}, out);
-    else
+    else if (method < 9)
       transfer::linear_to_faces_gather<Dim>(
           s.graph, *s.lattice, s.particles, s.bins,
           method == 7 ? transfer::RegularScheme::pic : transfer::RegularScheme::apic, {}, out);
+    else {
+      out.reset(s.graph.face_capacity());
+      const std::span<const double> affine = s.particles.field(s.particles.find_field("apic"));
+      if (method == 9)
+        s.patches->to_faces(s.particles, s.bins, affine, out);
+      else
+        s.patches->to_faces_gather(s.particles, s.bins, affine, out);
+    }
     benchmark::DoNotOptimize(out.value.data());
   }
   state.SetLabel(kMethodNames[method]);
@@ -155,12 +167,12 @@ BENCHMARK_TEMPLATE(BM_Binning, 2)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)
 BENCHMARK_TEMPLATE(BM_Binning, 3)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK_TEMPLATE(BM_ToFaces, 2)
     ->DenseRange(0, 4)
-    ->DenseRange(6, 8)
+    ->DenseRange(6, 10)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 BENCHMARK_TEMPLATE(BM_ToFaces, 3)
     ->DenseRange(0, 4)
-    ->DenseRange(6, 8)
+    ->DenseRange(6, 10)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 BENCHMARK_TEMPLATE(BM_ToParticles, 2)->DenseRange(0, 5)->Unit(benchmark::kMillisecond)->UseRealTime();

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <tuple>
 
 #include <fmt/format.h>
 
@@ -160,6 +161,53 @@ UniformPatches<Dim>::UniformPatches(const tree::CellGraph<Dim>& graph, std::span
     }
   for (tree::FaceId f = 0; f < graph.face_capacity(); ++f)
     if (face_[f]) faces_.push_back(f);
+  // Rim faces: the hat reaches a cell (of the same level, in a patch cell's block) that is not a
+  // patch cell, whose particles the scatter does not visit.
+  std::vector<std::uint8_t> rim(faces_.size(), 0);
+  parallel_for(
+      n_faces(),
+      [&](long i) {
+        const tree::FaceId f = faces_[i];
+        const tree::GraphFace& g = graph.face(f);
+        const int k = g.axis;
+        const bool upper = g.cell[1] != tree::no_cell;
+        const tree::CellId ref = upper ? g.cell[1] : g.cell[0];
+        const tree::CellId* blk = blocks_.data() + static_cast<long>(slot_[ref]) * block;
+        bool on_rim = false;
+        for_each_offset<Dim>([&](const IVec<Dim>& o) {
+          if (o[k] != (upper ? -1 : 0) && o[k] != (upper ? 0 : 1)) return;
+          const tree::CellId q = blk[block_index<Dim>(o)];
+          on_rim = on_rim || (q != tree::no_cell && !cell(q));
+        });
+        rim[i] = on_rim;
+      },
+      1024);
+  for (long i = 0; i < n_faces(); ++i)
+    if (rim[i]) face_[faces_[i]] = 2, ++n_rim_;
+  // The scatter's groups: (colour, level, slab), cells in slot order within a group.
+  constexpr int top = Dim - 1;
+  struct Key {
+    int colour, level;
+    long slab;
+    std::int32_t slot;
+    bool operator<(const Key& o) const {
+      return std::tie(colour, level, slab, slot) < std::tie(o.colour, o.level, o.slab, o.slot);
+    }
+  };
+  std::vector<Key> keys(cells_.size());
+  for (std::size_t i = 0; i < cells_.size(); ++i) {
+    const long slab = graph.address(cells_[i])[top] / 2;
+    keys[i] = {static_cast<int>(slab % 2), graph.level(cells_[i]), slab, static_cast<std::int32_t>(i)};
+  }
+  std::sort(keys.begin(), keys.end());
+  group_slots_.resize(keys.size());
+  for (std::size_t i = 0; i < keys.size(); ++i) {
+    group_slots_[i] = keys[i].slot;
+    const bool starts = i == 0 || keys[i].colour != keys[i - 1].colour || keys[i].level != keys[i - 1].level ||
+                        keys[i].slab != keys[i - 1].slab;
+    if (starts) colours_[keys[i].colour].push_back({static_cast<long>(i), static_cast<long>(i)});
+    colours_[keys[i].colour].back().second = static_cast<long>(i) + 1;
+  }
 }
 
 template <int Dim>
@@ -192,9 +240,8 @@ Vec<Dim> UniformPatches<Dim>::value(tree::CellId c, const Vec<Dim>& x, std::span
 }
 
 template <int Dim>
-TransferReport UniformPatches<Dim>::to_faces(const particles::Particles<Dim>& particles,
-                                             const particles::CellBins& bins, std::span<const double> affine,
-                                             FaceValues& out) const {
+void UniformPatches<Dim>::check_inputs(const particles::Particles<Dim>& particles, const particles::CellBins& bins,
+                                       std::span<const double> affine, const FaceValues& out) const {
   LIQUID_VERIFY(bins.n_particles() == particles.size(),
                 "UniformPatches: bins hold {} particles, there are {}", bins.n_particles(), particles.size());
   LIQUID_VERIFY(affine.empty() || affine.size() == static_cast<std::size_t>(particles.size()) * Dim * Dim,
@@ -202,54 +249,140 @@ TransferReport UniformPatches<Dim>::to_faces(const particles::Particles<Dim>& pa
                 particles.size());
   LIQUID_VERIFY(static_cast<int>(out.value.size()) >= graph_->face_capacity(),
                 "UniformPatches: {} face values for {} face ids", out.value.size(), graph_->face_capacity());
+}
+
+template <int Dim>
+void UniformPatches<Dim>::gather_face(long i, const particles::Particles<Dim>& particles,
+                                      const particles::CellBins& bins, std::span<const double> affine,
+                                      FaceValues& out, TransferReport& r) const {
   const tree::CellGraph<Dim>& graph = *graph_;
+  const tree::FaceId f = faces_[i];
+  const tree::GraphFace& g = graph.face(f);
+  const int k = g.axis;
+  // The face is the lower axis-k side of its upper cell, or the upper side of its lower cell at the
+  // domain's upper wall; the particles its hat reaches are in the two layers of that cell's block
+  // along k.
+  const bool upper = g.cell[1] != tree::no_cell;
+  const tree::CellId ref = upper ? g.cell[1] : g.cell[0];
+  IVec<Dim> af = graph.address(ref);
+  if (!upper) ++af[k];
+  const int level = graph.level(ref);
+  const long n = 1L << level;
+  const Vec<Dim> xf = graph.face_centre(f);
+  const Vec<Dim> h = graph.cell_size(ref);
+  const tree::CellId* blk = blocks_.data() + static_cast<long>(slot_[ref]) * block;
+  double sum = 0.0, mass = 0.0;
+  for_each_offset<Dim>([&](const IVec<Dim>& o) {
+    if (o[k] != (upper ? -1 : 0) && o[k] != (upper ? 0 : 1)) return;
+    const tree::CellId q = blk[block_index<Dim>(o)];
+    if (q == tree::no_cell) return;
+    const IVec<Dim>& aq = graph.address(q);
+    const Vec<Dim> lo = graph.box(q).lo;
+    for (std::int32_t p : bins.of(q)) {
+      const Vec<Dim>& xp = particles.x[p];
+      const Local<Dim> st(lo, h, aq, n, k, xp);
+      int corner = 0;
+      bool inside = true;
+      for (int j = 0; j < Dim; ++j) {
+        const long d = af[j] - aq[j] - st.off[j];
+        inside = inside && (d == 0 || d == 1);
+        corner |= static_cast<int>(d & 1) << j;
+      }
+      if (!inside) continue;
+      const double w = st.weight(corner);
+      if (w == 0.0) continue;
+      double value = particles.v[p][k];
+      if (!affine.empty())
+        for (int j = 0; j < Dim; ++j) value += affine[(p * Dim + k) * Dim + j] * (xf[j] - xp[j]);
+      sum += w * value;
+      mass += w;
+    }
+  });
+  ++r.targets;
+  if (mass > 0.0) {
+    out.value[f] = sum / mass;
+    out.known[f] = 1;
+    out.weight[f] = mass;
+  } else {
+    out.value[f] = 0.0, out.known[f] = 0, out.weight[f] = 0.0;
+    ++r.empty;
+  }
+}
+
+template <int Dim>
+TransferReport UniformPatches<Dim>::to_faces_gather(const particles::Particles<Dim>& particles,
+                                                    const particles::CellBins& bins,
+                                                    std::span<const double> affine, FaceValues& out) const {
+  check_inputs(particles, bins, affine, out);
+  TransferReport total;
+  parallel_for(
+      n_faces(), [] { return TransferReport{}; },
+      [&](TransferReport& r, long i) { gather_face(i, particles, bins, affine, out, r); },
+      [&](TransferReport& r) { total += r; }, 256);
+  total.max_degree_used = 1;
+  return total;
+}
+
+template <int Dim>
+TransferReport UniformPatches<Dim>::to_faces(const particles::Particles<Dim>& particles,
+                                             const particles::CellBins& bins, std::span<const double> affine,
+                                             FaceValues& out) const {
+  check_inputs(particles, bins, affine, out);
+  const tree::CellGraph<Dim>& graph = *graph_;
+  // Sums and masses per face id, of the scattered faces only. A particle in a cell of slab z (along
+  // the last axis, at its level) reaches faces of the cells z - 1 .. z + 1 of that level, so groups
+  // of one colour (slabs two apart, any level: the faces of different levels differ) never share
+  // a face.
+  std::vector<std::array<double, 2>> acc(graph.face_capacity(), {0.0, 0.0});  // sum, mass
+  for (int colour = 0; colour < 2; ++colour) {
+    const auto& groups = colours_[colour];
+    parallel_for(
+        static_cast<long>(groups.size()),
+        [&](long gi) {
+          for (long i = groups[gi].first; i < groups[gi].second; ++i) {
+            const std::int32_t s = group_slots_[i];
+            const tree::CellId c = cells_[s];
+            const int level = graph.level(c);
+            const long n = 1L << level;
+            const IVec<Dim>& a = graph.address(c);
+            const Vec<Dim> lo = graph.box(c).lo, h = graph.cell_size(c);
+            for (std::int32_t p : bins.of(c)) {
+              const Vec<Dim>& xp = particles.x[p];
+              for (int k = 0; k < Dim; ++k) {
+                const Local<Dim> st(lo, h, a, n, k, xp);
+                const tree::FaceId* table = faces_table_.data() + (static_cast<long>(s) * Dim + k) * axis_faces;
+                for (int corner = 0; corner < (1 << Dim); ++corner) {
+                  IVec<Dim> o = st.off;
+                  for (int j = 0; j < Dim; ++j) o[j] += (corner >> j) & 1;
+                  const tree::FaceId f = table[face_index<Dim>(k, o)];
+                  if (f == tree::no_face || face_[f] != 1) continue;  // past a wall, or gathered
+                  const double w = st.weight(corner);
+                  if (w == 0.0) continue;
+                  double value = particles.v[p][k];
+                  if (!affine.empty())
+                    for (int j = 0; j < Dim; ++j) {
+                      // The face's centre on c's lattice: o_k is its side, the other axes the
+                      // middle of the cell at offset o.
+                      const double xf = lo[j] + h[j] * (static_cast<double>(o[j]) + (j == k ? 0.0 : 0.5));
+                      value += affine[(p * Dim + k) * Dim + j] * (xf - xp[j]);
+                    }
+                  acc[f][0] += w * value;
+                  acc[f][1] += w;
+                }
+              }
+            }
+          }
+        },
+        1);
+  }
   TransferReport total;
   parallel_for(
       n_faces(), [] { return TransferReport{}; },
       [&](TransferReport& r, long i) {
         const tree::FaceId f = faces_[i];
-        const tree::GraphFace& g = graph.face(f);
-        const int k = g.axis;
-        // The face is the lower axis-k side of its upper cell, or the upper side of its lower cell
-        // at the domain's upper wall; the particles its hat reaches are in the two layers of that
-        // cell's block along k.
-        const bool upper = g.cell[1] != tree::no_cell;
-        const tree::CellId ref = upper ? g.cell[1] : g.cell[0];
-        IVec<Dim> af = graph.address(ref);
-        if (!upper) ++af[k];
-        const int level = graph.level(ref);
-        const long n = 1L << level;
-        const Vec<Dim> xf = graph.face_centre(f);
-        const Vec<Dim> h = graph.cell_size(ref);
-        const tree::CellId* blk = blocks_.data() + static_cast<long>(slot_[ref]) * block;
-        double sum = 0.0, mass = 0.0;
-        for_each_offset<Dim>([&](const IVec<Dim>& o) {
-          if (o[k] != (upper ? -1 : 0) && o[k] != (upper ? 0 : 1)) return;
-          const tree::CellId q = blk[block_index<Dim>(o)];
-          if (q == tree::no_cell) return;
-          const IVec<Dim>& aq = graph.address(q);
-          const Vec<Dim> lo = graph.box(q).lo;
-          for (std::int32_t p : bins.of(q)) {
-            const Vec<Dim>& xp = particles.x[p];
-            const Local<Dim> st(lo, h, aq, n, k, xp);
-            int corner = 0;
-            bool inside = true;
-            for (int j = 0; j < Dim; ++j) {
-              const long d = af[j] - aq[j] - st.off[j];
-              inside = inside && (d == 0 || d == 1);
-              corner |= static_cast<int>(d & 1) << j;
-            }
-            if (!inside) continue;
-            const double w = st.weight(corner);
-            if (w == 0.0) continue;
-            double value = particles.v[p][k];
-            if (!affine.empty())
-              for (int j = 0; j < Dim; ++j) value += affine[(p * Dim + k) * Dim + j] * (xf[j] - xp[j]);
-            sum += w * value;
-            mass += w;
-          }
-        });
+        if (face_[f] == 2) return gather_face(i, particles, bins, affine, out, r);
         ++r.targets;
+        const auto [sum, mass] = acc[f];
         if (mass > 0.0) {
           out.value[f] = sum / mass;
           out.known[f] = 1;
@@ -259,7 +392,7 @@ TransferReport UniformPatches<Dim>::to_faces(const particles::Particles<Dim>& pa
           ++r.empty;
         }
       },
-      [&](TransferReport& r) { total += r; }, 256);
+      [&](TransferReport& r) { total += r; }, 1024);
   total.max_degree_used = 1;
   return total;
 }

@@ -3,6 +3,8 @@
 
 #include <gtest/gtest.h>
 
+#include <omp.h>
+
 #include <random>
 
 #include "liquid/particles/seeding.hpp"
@@ -191,6 +193,57 @@ TYPED_TEST(PatchesTest, OnNonGradedTreesTheyAreExactlyTheUniformBlocksAndReprodu
   EXPECT_GT(checked, 0);
   EXPECT_LT(worst_back, 1e-12);
   EXPECT_LT(worst_grad, 1e-11);
+}
+
+/// The scatter (to_faces) is the gather's definition up to the order of each face's sums, on one
+/// thread and on two, with particles anywhere in their cells, random velocities and affine matrices,
+/// on a non-graded tree that has both scattered faces and faces on the patches' rims.
+TYPED_TEST(PatchesTest, TheScatterIsTheGatherOnAnyThreadCount) {
+  constexpr int Dim = TypeParam::value;
+  tree::CellGraphOptions<Dim> options;
+  options.max_jump = 2;
+  const Box<Dim> domain{Vec<Dim>::Constant(-1.0), Vec<Dim>::Constant(1.0)};
+  const auto g = tree::random<Dim>(domain, 34, 2, Dim == 2 ? 6 : 4, 0.3, options);
+  const transfer::UniformPatches<Dim> patches(g, g.cell_ids());
+  ASSERT_GT(patches.n_rim_faces(), 0);
+  ASSERT_GT(patches.n_faces() - patches.n_rim_faces(), 0);
+  auto p = seeded_with_affine<Dim>(g, 9);
+  const int apic = p.find_field("apic");
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> val(-1.0, 1.0);
+  for (int i = 0; i < p.size(); ++i)
+    for (int k = 0; k < Dim; ++k) p.v[i][k] = val(rng);
+  for (double& c : p.field(apic)) c = val(rng);
+  particles::CellBins bins;
+  particles::bin_particles<Dim>(g, p.x, bins);
+  transfer::FaceValues gathered;
+  gathered.reset(g.face_capacity());
+  const transfer::TransferReport rg = patches.to_faces_gather(p, bins, p.field(apic), gathered);
+  const int threads = omp_get_max_threads();
+  std::vector<double> on_one;
+  for (int t : {1, 2}) {
+    omp_set_num_threads(t);
+    transfer::FaceValues scattered;
+    scattered.reset(g.face_capacity());
+    const transfer::TransferReport rs = patches.to_faces(p, bins, p.field(apic), scattered);
+    EXPECT_EQ(rs.targets, rg.targets);
+    EXPECT_EQ(rs.empty, rg.empty);
+    long compared = 0;
+    g.for_each_face([&](tree::FaceId f) {
+      ASSERT_EQ(scattered.known[f], gathered.known[f]) << "face " << f;
+      if (!patches.face(f)) return;
+      EXPECT_NEAR(scattered.value[f], gathered.value[f], 1e-13 * (1.0 + std::abs(gathered.value[f])))
+          << "face " << f;
+      EXPECT_NEAR(scattered.weight[f], gathered.weight[f], 1e-13 * gathered.weight[f]) << "face " << f;
+      compared += gathered.known[f];
+    });
+    EXPECT_GT(compared, patches.n_rim_faces());
+    if (t == 1)
+      on_one = scattered.value;
+    else
+      EXPECT_EQ(scattered.value, on_one) << "the scatter's bits depend on the thread count";
+  }
+  omp_set_num_threads(threads);
 }
 
 TYPED_TEST(PatchesTest, TheRbfTransferSkipsPatchFacesAndTheVelocityFieldUsesThePatches) {
