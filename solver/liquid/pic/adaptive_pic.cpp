@@ -128,7 +128,9 @@ AdaptivePic<Dim>::AdaptivePic(const PicOptions<Dim>& options)
   u_.assign(graph_.face_capacity(), 0.0);
   known_.assign(graph_.face_capacity(), 1);
   p_.assign(graph_.cell_capacity(), 0.0);
-  weights_ = std::make_unique<rbf::WeightCache<Dim>>(0x1p-24, std::size_t{1} << 14);
+  // At 2^-7 the RBF-FD rows meet some 7,000 new layouts a step; a bound of 2^14 dropped layouts still
+  // in use every other step. Measured: docs/findings/table1-scale.md.
+  weights_ = std::make_unique<rbf::WeightCache<Dim>>(0x1p-24, std::size_t{1} << 16);
   interpolants_ = std::make_unique<rbf::InterpolantCache<Dim>>(0x1p-24, std::size_t{1} << 13);
   // Made here, outside the timed phases: an AMG solver starts MPI when it is made.
   ppe_solver_ = linalg::make_solver(options_.solver);

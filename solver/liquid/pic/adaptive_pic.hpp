@@ -353,7 +353,7 @@ class AdaptivePic {
   mac::PoissonSystem<Dim> system_;
   /// The RBF-FD weights of the PPE rows and face gradients, kept across steps: a step's tree keeps
   /// most of the last step's T-junction layouts, and an entry is a function of its layout alone.
-  /// At most about 2^14 layouts (two generations; about 40 MB in 3D).
+  /// At most about 2^16 layouts (two generations; about 160 MB in 3D).
   std::unique_ptr<rbf::WeightCache<Dim>> weights_;
   std::unique_ptr<rbf::InterpolantCache<Dim>> interpolants_;  // the RBF transfer's factors, kept across steps
   // The PPE solver, kept across steps: an AMG solver keeps its hierarchy while the layout stays.
