@@ -24,9 +24,17 @@
 namespace liquid {
 namespace {
 
-const char* kMethodNames[] = {
-    "rbf",         "mls",         "linear", "pic", "apic", "rbf, own factors", "rbf, full condition estimate",
-    "pic, gather", "apic, gather", "apic, patches", "apic, patches, gather"};
+const char* kMethodNames[] = {"rbf",
+                              "mls",
+                              "linear",
+                              "pic",
+                              "apic",
+                              "rbf, own factors",
+                              "rbf, full condition estimate",
+                              "pic, gather",
+                              "apic, gather",
+                              "apic, patches",
+                              "apic, patches, gather"};
 
 template <int Dim>
 struct Scene {

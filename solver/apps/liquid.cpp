@@ -193,7 +193,8 @@ void echo_sph(const scene::Scene<Dim>& s, const scene::RunSettings& settings, bo
     fmt::print("  settle      {} s before t = 0{}\n", sc.settle, sc.gate ? ", held behind the gate" : "");
   echo_time_and_output(
       s.time, s.output, settings, " (of the sound speed)",
-      o.serial_below > 0 ? fmt::format("; a step with fewer than {} particles on one thread", o.serial_below) : "");
+      o.serial_below > 0 ? fmt::format("; a step with fewer than {} particles on one thread", o.serial_below)
+                         : "");
 }
 
 /// One line of progress: a bar on a terminal (rewritten in place), plain lines otherwise.

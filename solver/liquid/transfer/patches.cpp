@@ -203,8 +203,8 @@ UniformPatches<Dim>::UniformPatches(const tree::CellGraph<Dim>& graph, std::span
   group_slots_.resize(keys.size());
   for (std::size_t i = 0; i < keys.size(); ++i) {
     group_slots_[i] = keys[i].slot;
-    const bool starts = i == 0 || keys[i].colour != keys[i - 1].colour || keys[i].level != keys[i - 1].level ||
-                        keys[i].slab != keys[i - 1].slab;
+    const bool starts = i == 0 || keys[i].colour != keys[i - 1].colour ||
+                        keys[i].level != keys[i - 1].level || keys[i].slab != keys[i - 1].slab;
     if (starts) colours_[keys[i].colour].push_back({static_cast<long>(i), static_cast<long>(i)});
     colours_[keys[i].colour].back().second = static_cast<long>(i) + 1;
   }
@@ -240,8 +240,9 @@ Vec<Dim> UniformPatches<Dim>::value(tree::CellId c, const Vec<Dim>& x, std::span
 }
 
 template <int Dim>
-void UniformPatches<Dim>::check_inputs(const particles::Particles<Dim>& particles, const particles::CellBins& bins,
-                                       std::span<const double> affine, const FaceValues& out) const {
+void UniformPatches<Dim>::check_inputs(const particles::Particles<Dim>& particles,
+                                       const particles::CellBins& bins, std::span<const double> affine,
+                                       const FaceValues& out) const {
   LIQUID_VERIFY(bins.n_particles() == particles.size(),
                 "UniformPatches: bins hold {} particles, there are {}", bins.n_particles(), particles.size());
   LIQUID_VERIFY(affine.empty() || affine.size() == static_cast<std::size_t>(particles.size()) * Dim * Dim,
@@ -350,7 +351,8 @@ TransferReport UniformPatches<Dim>::to_faces(const particles::Particles<Dim>& pa
               const Vec<Dim>& xp = particles.x[p];
               for (int k = 0; k < Dim; ++k) {
                 const Local<Dim> st(lo, h, a, n, k, xp);
-                const tree::FaceId* table = faces_table_.data() + (static_cast<long>(s) * Dim + k) * axis_faces;
+                const tree::FaceId* table =
+                    faces_table_.data() + (static_cast<long>(s) * Dim + k) * axis_faces;
                 for (int corner = 0; corner < (1 << Dim); ++corner) {
                   IVec<Dim> o = st.off;
                   for (int j = 0; j < Dim; ++j) o[j] += (corner >> j) & 1;

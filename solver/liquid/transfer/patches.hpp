@@ -13,8 +13,8 @@
 
 #include <array>
 #include <cstdint>
-#include <utility>
 #include <span>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
