@@ -36,4 +36,18 @@ struct TransferReport {
   std::string describe() const;
 };
 
+/// A face's value from a positive-weight transfer: the weighted mean sum / mass of its particles'
+/// values, or unknown (value 0, weight 0) when no particle reaches it; counted in r.
+inline void store_mean(FaceValues& out, int f, double sum, double mass, TransferReport& r) {
+  ++r.targets;
+  if (mass > 0.0) {
+    out.value[f] = sum / mass;
+    out.known[f] = 1;
+    out.weight[f] = mass;
+  } else {
+    out.value[f] = 0.0, out.known[f] = 0, out.weight[f] = 0.0;
+    ++r.empty;
+  }
+}
+
 }  // namespace liquid::transfer

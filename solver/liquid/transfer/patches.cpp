@@ -299,15 +299,7 @@ void UniformPatches<Dim>::gather_face(long i, const particles::Particles<Dim>& p
       mass += w;
     }
   });
-  ++r.targets;
-  if (mass > 0.0) {
-    out.value[f] = sum / mass;
-    out.known[f] = 1;
-    out.weight[f] = mass;
-  } else {
-    out.value[f] = 0.0, out.known[f] = 0, out.weight[f] = 0.0;
-    ++r.empty;
-  }
+  store_mean(out, f, sum, mass, r);
 }
 
 template <int Dim>
@@ -383,16 +375,7 @@ TransferReport UniformPatches<Dim>::to_faces(const particles::Particles<Dim>& pa
       [&](TransferReport& r, long i) {
         const tree::FaceId f = faces_[i];
         if (face_[f] == 2) return gather_face(i, particles, bins, affine, out, r);
-        ++r.targets;
-        const auto [sum, mass] = acc[f];
-        if (mass > 0.0) {
-          out.value[f] = sum / mass;
-          out.known[f] = 1;
-          out.weight[f] = mass;
-        } else {
-          out.value[f] = 0.0, out.known[f] = 0, out.weight[f] = 0.0;
-          ++r.empty;
-        }
+        store_mean(out, f, acc[f][0], acc[f][1], r);
       },
       [&](TransferReport& r) { total += r; }, 1024);
   total.max_degree_used = 1;

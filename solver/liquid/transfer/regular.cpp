@@ -342,14 +342,7 @@ TransferReport linear_to_faces_gather(const tree::CellGraph<Dim>& graph, const R
             }
             if (j == Dim) break;
           }
-          ++r.targets;
-          if (mass > 0.0) {
-            out.value[f] = sum / mass;
-            out.known[f] = 1;
-            out.weight[f] = mass;
-          } else {
-            ++r.empty;
-          }
+          store_mean(out, f, sum, mass, r);
         },
         [&](TransferReport& r) { total += r; }, 256);
   }
