@@ -331,13 +331,20 @@ void write_json(const std::string& path, const scene::RunSummary& s, const std::
 }
 
 /// The paper's Table 1 columns (Adams et al. 2007, Sec. 6) and every phase.
-void print_sph_summary(const scene::SphRunSummary& s, const std::string& name, int dim, bool adaptive) {
+/// `serial_below`: the run's [sph] serial_below; the header says when some steps ran on one thread.
+void print_sph_summary(const scene::SphRunSummary& s, const std::string& name, int dim, bool adaptive,
+                       int serial_below) {
   const auto sec = [&](const char* phase) {
     const auto it = s.seconds.find(phase);
     return it == s.seconds.end() ? 0.0 : it->second;
   };
-  fmt::print("\nTable 1 row, {} SPH ({}, {}D, {} steps to t = {:.4g} s, {} threads)\n",
-             adaptive ? "adaptive" : "single-resolution (--regular)", name, dim, s.steps, s.time, s.threads);
+  const std::string serial =
+      s.threads > 1 && s.min_particles < serial_below
+          ? fmt::format("; the steps with fewer than {} particles on one", serial_below)
+          : "";
+  fmt::print("\nTable 1 row, {} SPH ({}, {}D, {} steps to t = {:.4g} s, {} threads{})\n",
+             adaptive ? "adaptive" : "single-resolution (--regular)", name, dim, s.steps, s.time, s.threads,
+             serial);
   fmt::print("  {:>10} {:>10} {:>8} {:>11} {:>8} {:>10} {:>9} {:>8} {:>9} {:>9}\n", "particles", "single res",
              "gain", "neighbours", "forces", "projection", "redist.", "elfs", "resample", "total s");
   fmt::print(
@@ -442,7 +449,8 @@ int run_sph(const Args& a, const std::string& scene_path, scene::Scene<Dim>* loa
   }
   run_to_end(*run, a);
   const scene::SphRunSummary s = run->summary();
-  print_sph_summary(s, run->scene().name, Dim, run->scene().adaptive);
+  print_sph_summary(s, run->scene().name, Dim, run->scene().adaptive,
+                    scene::sph_options<Dim>(run->scene()).serial_below);
   if (!a.json.empty()) write_sph_json(a.json, s, run->scene().name, Dim, run->scene().adaptive);
   if (!a.out.empty()) fmt::print("  frames: {} in {}/{}.xmf\n", run->n_frames(), a.out, run->scene().name);
   return 0;
