@@ -88,6 +88,18 @@ void for_each_offset(Fn&& fn) {
   }
 }
 
+/// Calls fn(q) for each in-domain cell of the two layers along k of a block (`blk`) that an axis-k
+/// face's hat reaches: the block of the face's upper cell (`upper`), or of its lower cell at the
+/// domain's upper wall.
+template <int Dim, class Fn>
+void for_each_hat_cell(int k, bool upper, const tree::CellId* blk, Fn&& fn) {
+  for_each_offset<Dim>([&](const IVec<Dim>& o) {
+    if (o[k] != (upper ? -1 : 0) && o[k] != (upper ? 0 : 1)) return;
+    const tree::CellId q = blk[block_index<Dim>(o)];
+    if (q != tree::no_cell) fn(q);
+  });
+}
+
 }  // namespace
 
 template <int Dim>
@@ -174,11 +186,7 @@ UniformPatches<Dim>::UniformPatches(const tree::CellGraph<Dim>& graph, std::span
         const tree::CellId ref = upper ? g.cell[1] : g.cell[0];
         const tree::CellId* blk = blocks_.data() + static_cast<long>(slot_[ref]) * block;
         bool on_rim = false;
-        for_each_offset<Dim>([&](const IVec<Dim>& o) {
-          if (o[k] != (upper ? -1 : 0) && o[k] != (upper ? 0 : 1)) return;
-          const tree::CellId q = blk[block_index<Dim>(o)];
-          on_rim = on_rim || (q != tree::no_cell && !cell(q));
-        });
+        for_each_hat_cell<Dim>(k, upper, blk, [&](tree::CellId q) { on_rim = on_rim || !cell(q); });
         rim[i] = on_rim;
       },
       1024);
@@ -273,10 +281,7 @@ void UniformPatches<Dim>::gather_face(long i, const particles::Particles<Dim>& p
   const Vec<Dim> h = graph.cell_size(ref);
   const tree::CellId* blk = blocks_.data() + static_cast<long>(slot_[ref]) * block;
   double sum = 0.0, mass = 0.0;
-  for_each_offset<Dim>([&](const IVec<Dim>& o) {
-    if (o[k] != (upper ? -1 : 0) && o[k] != (upper ? 0 : 1)) return;
-    const tree::CellId q = blk[block_index<Dim>(o)];
-    if (q == tree::no_cell) return;
+  for_each_hat_cell<Dim>(k, upper, blk, [&](tree::CellId q) {
     const IVec<Dim>& aq = graph.address(q);
     const Vec<Dim> lo = graph.box(q).lo;
     for (std::int32_t p : bins.of(q)) {
