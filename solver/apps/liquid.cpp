@@ -92,13 +92,17 @@ void echo(const scene::Scene<Dim>& s, const scene::RunSettings& settings, bool r
                  : "",
              o.poisson.nullspace == mac::Nullspace::pin ? "; a closed box's PPE pinned at one cell" : "");
   if (rbf_transfer)
-    fmt::print("  transfer    {}PHS r^{} + degree {}{}{}\n",
+    fmt::print("  transfer    {}PHS r^{} + degree {}{}{}{}\n",
                !o.adaptive || !o.uniform_patches ? ""
                : o.tent_at_level_changes
                    ? "APIC in uniform patches, particle -> face by tents and face -> particle by "
                    : "APIC in uniform patches, across level changes ",
                o.rbf.exponent, o.rbf.degree,
                o.adaptive && o.uniform_patches && o.rbf_gradient_affine ? " (its gradient as APIC's C)" : "",
+               o.adaptive && o.uniform_patches && !o.tent_at_level_changes && o.level_change_tent_share > 0.0
+                   ? fmt::format(", {:g}% of the tents' mean blended into its faces",
+                                 100.0 * o.level_change_tent_share)
+                   : "",
                s.paper_preset ? " (the paper's preset)" : "");
   if (o.reseed && rbf_transfer) {
     const int lo = Dim == 2 ? 3 : 5, hi = Dim == 2 ? 12 : 15;

@@ -18,10 +18,13 @@ struct FlowMethod {
   bool adaptive;
   pic::PicTransfer transfer;
   bool paper = false;
-  bool everywhere = false;  ///< adaptive RBF with the RBF everywhere (no uniform patches)
-  bool tent = false;        ///< adaptive RBF with tent particle -> face at level changes
-  int ppe_degree = 0;       ///< adaptive RBF: the RBF-FD rows' polynomial degree (0: the default)
-  bool flux_rows = false;   ///< adaptive RBF: flux rows at T-junctions (PPE = D G, mac::IrregularRows)
+  bool everywhere = false;   ///< adaptive RBF with the RBF everywhere (no uniform patches)
+  bool tent = false;         ///< adaptive RBF with tent particle -> face at level changes
+  int ppe_degree = 0;        ///< adaptive RBF: the RBF-FD rows' polynomial degree (0: the default)
+  bool flux_rows = false;    ///< adaptive RBF: flux rows at T-junctions (PPE = D G, mac::IrregularRows)
+  double tent_share = -1.0;  ///< adaptive RBF: PicOptions::level_change_tent_share (< 0: the default)
+  /// A comparison row: a setting other than the default adaptive one or the paper's preset.
+  bool variant() const { return everywhere || tent || ppe_degree > 0 || flux_rows || tent_share >= 0.0; }
 };
 /// The methods of `all` that --methods names, in the order named (every one when none is named);
 /// throws naming a method that is not one of them.

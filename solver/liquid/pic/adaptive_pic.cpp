@@ -97,6 +97,8 @@ tree::CellGraph<Dim> initial_graph(const PicOptions<Dim>& o) {
       !(o.tent_at_level_changes && o.rbf_gradient_affine && o.uniform_patches),
       "PIC: the tent particle -> face at level changes with the RBF gradient as the particles' C is "
       "unstable (a 2D still pool blew up); take one of them");
+  LIQUID_VERIFY(o.level_change_tent_share >= 0.0 && o.level_change_tent_share <= 1.0,
+                "PIC: level_change_tent_share {} is outside [0, 1]", o.level_change_tent_share);
   LIQUID_VERIFY(o.min_face_mass > 0.0 && o.min_face_mass <= 1.0, "PIC: min_face_mass {} is outside (0, 1]",
                 o.min_face_mass);
   return tree::uniform<Dim>(o.domain, o.adaptive ? o.coarse_level : o.finest_level, graph_options(o));
@@ -467,6 +469,8 @@ void AdaptivePic<Dim>::to_faces(PicStepReport& r) {
     } else {
       r.p2g = transfer::particles_to_faces<Dim>(graph_, particles_, bins_, options_.rbf, faces,
                                                 patches_->face_mask());
+      transfer::blend_tent_mean<Dim>(graph_, particles_, bins_, patches_->face_mask(),
+                                     options_.level_change_tent_share, faces);
     }
     r.p2g += patches_->to_faces(particles_, bins_, particles_.field(apic_field_), faces);
     r.patch_cells = patches_->n_cells();

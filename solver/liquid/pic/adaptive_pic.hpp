@@ -116,6 +116,14 @@ struct PicOptions {
   /// less accurate in a vortex (scene key `[solver] level_change_p2g = "tent"`; measured:
   /// docs/findings/transfer-stability.md).
   bool tent_at_level_changes = false;
+  /// With uniform_patches and the RBF particle -> face at level changes: the share of the tents'
+  /// positive mean (C = 0) blended into each level-change face, v_f = (1 - s) v_RBF + s v_tent
+  /// (transfer::blend_tent_mean). 3D: 0.1. Without it a 3D still pool's noise grows (+0.045 / s in the
+  /// cube at finest 4, 100-fold over 120 s); with it the noise stays flat, for more dissipation
+  /// (held particles in 3D drift 0.115 from the field after 40 steps against 0.078). 2D: 0, whose
+  /// pools do not grow without it and whose vortex would lose 13% of its accuracy (scene key
+  /// `[solver] level_change_tent_share`; measured: docs/findings/transfer-stability.md).
+  double level_change_tent_share = Dim == 3 ? 0.1 : 0.0;
   /// With uniform_patches: the particles outside the patches take the RBF interpolant's gradient as
   /// APIC's C (0 where a value was clamped) instead of C = 0, so their particle -> face keeps the
   /// flow's affine part there too (scene key `[solver] affine_outside_patches = "zero"` sets C = 0).
@@ -181,6 +189,7 @@ struct PicOptions {
     reseeding.hi = Dim == 2 ? 12 : 15;
     reseeding.keep = false;
     uniform_patches = false;
+    level_change_tent_share = 0.0;
     refill_emptied = false;
     poisson.rbf.degree = 2;
     poisson.gradient_degree = 2;

@@ -605,6 +605,7 @@ const std::vector<std::string> solver_keys = {"method",
                                               "ppe_rows",
                                               "patch_transfer",
                                               "level_change_p2g",
+                                              "level_change_tent_share",
                                               "affine_outside_patches",
                                               "preset"};
 
@@ -668,6 +669,15 @@ void read_pic_solver(const TableReader& r, Scene<Dim>& s) {
                 "{}: the tent transfer at level changes goes with patch_transfer = \"apic\"",
                 r.where("level_change_p2g"));
   if (o.tent_at_level_changes) o.rbf_gradient_affine = false;  // together they blow up a 2D pool
+  if (r.has("level_change_tent_share")) {
+    o.level_change_tent_share = r.number("level_change_tent_share");
+    LIQUID_VERIFY(o.level_change_tent_share >= 0.0 && o.level_change_tent_share <= 1.0,
+                  "{}: {} is outside [0, 1]", r.where("level_change_tent_share"), o.level_change_tent_share);
+    LIQUID_VERIFY(o.uniform_patches && !o.tent_at_level_changes,
+                  "{}: the tents' share blends into the RBF particle -> face at level changes, which needs "
+                  "patch_transfer = \"apic\" and level_change_p2g = \"rbf\"",
+                  r.where("level_change_tent_share"));
+  }
   if (r.has("affine_outside_patches")) {
     o.rbf_gradient_affine = r.choice("affine_outside_patches", {"zero", "rbf-gradient"}) == "rbf-gradient";
     LIQUID_VERIFY(o.uniform_patches,

@@ -435,6 +435,34 @@ TransferReport tent_to_faces(const tree::CellGraph<Dim>& graph, const particles:
       [&](TentScratch& st) { total += st.report; }, 256);
   return total;
 }
+template <int Dim>
+long blend_tent_mean(const tree::CellGraph<Dim>& graph, const particles::Particles<Dim>& particles,
+                     const particles::CellBins& bins, std::span<const std::uint8_t> skip, double share,
+                     FaceValues& out) {
+  LIQUID_VERIFY(share >= 0.0 && share <= 1.0, "the tents' share {} is outside [0, 1]", share);
+  if (share == 0.0) return 0;
+  const long n = graph.face_capacity();
+  std::vector<std::uint8_t> left(n, 1);  // the faces tent_to_faces leaves: skipped or not known
+  for (long f = 0; f < n; ++f) left[f] = skip[f] || !out.known[f];
+  FaceValues tents;
+  tents.reset(static_cast<int>(n));
+  tent_to_faces<Dim>(graph, particles, bins, {}, left, tents);
+  long blended = 0;
+  for (long f = 0; f < n; ++f)
+    if (tents.known[f]) {
+      out.value[f] += share * (tents.value[f] - out.value[f]);
+      ++blended;
+    }
+  return blended;
+}
+
+template long blend_tent_mean<2>(const tree::CellGraph<2>&, const particles::Particles<2>&,
+                                 const particles::CellBins&, std::span<const std::uint8_t>, double,
+                                 FaceValues&);
+template long blend_tent_mean<3>(const tree::CellGraph<3>&, const particles::Particles<3>&,
+                                 const particles::CellBins&, std::span<const std::uint8_t>, double,
+                                 FaceValues&);
+
 template TransferReport tent_to_faces<2>(const tree::CellGraph<2>&, const particles::Particles<2>&,
                                          const particles::CellBins&, std::span<const double>,
                                          std::span<const std::uint8_t>, FaceValues&);

@@ -7,6 +7,7 @@
 
 #include <random>
 
+#include "liquid/core/error.hpp"
 #include "liquid/particles/seeding.hpp"
 #include "liquid/transfer/patches.hpp"
 #include "liquid/transfer/regular.hpp"
@@ -343,6 +344,53 @@ TYPED_TEST(PatchesTest, TentWeightsStayInTheParticlesRangeAndReproduceAffineFiel
       worst = std::max(worst, std::abs(out.value[f] - field(g.face_centre(f))[g.face(f).axis]));
   });
   EXPECT_LT(worst, 1e-12);
+}
+
+TYPED_TEST(PatchesTest, TheTentShareBlendsOnlyTheFacesTheRbfSetAndLeavesTheRest) {
+  constexpr int Dim = TypeParam::value;
+  tree::CellGraphOptions<Dim> options;
+  options.max_jump = 3;
+  const Box<Dim> domain{Vec<Dim>::Constant(-1.0), Vec<Dim>::Constant(1.0)};
+  const auto g = tree::random<Dim>(domain, 23, 2, Dim == 2 ? 6 : 4, 0.3, options);
+  const transfer::UniformPatches<Dim> patches(g, g.cell_ids());
+  auto p = seeded_with_affine<Dim>(g, 5);
+  particles::CellBins bins;
+  particles::bin_particles<Dim>(g, p.x, bins);
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> val(-1.0, 1.0);
+  for (auto& v : p.v)
+    for (int k = 0; k < Dim; ++k) v[k] = val(rng);
+  // The faces as a transfer left them: arbitrary values, every third face unknown.
+  transfer::FaceValues before;
+  before.reset(g.face_capacity());
+  g.for_each_face([&](tree::FaceId f) {
+    before.value[f] = val(rng);
+    before.known[f] = f % 3 != 0;
+  });
+  transfer::FaceValues tents;
+  tents.reset(g.face_capacity());
+  transfer::tent_to_faces<Dim>(g, p, bins, {}, patches.face_mask(), tents);
+
+  transfer::FaceValues out = before;
+  EXPECT_EQ(transfer::blend_tent_mean<Dim>(g, p, bins, patches.face_mask(), 0.0, out), 0);
+  EXPECT_EQ(out.value, before.value);  // share 0: the same bits
+
+  const double share = 0.3;
+  const long blended = transfer::blend_tent_mean<Dim>(g, p, bins, patches.face_mask(), share, out);
+  long expected = 0;
+  g.for_each_face([&](tree::FaceId f) {
+    if (patches.face(f) || !before.known[f] || !tents.known[f]) {
+      EXPECT_EQ(out.value[f], before.value[f]) << "face " << f;
+      return;
+    }
+    ++expected;
+    EXPECT_NEAR(out.value[f], (1.0 - share) * before.value[f] + share * tents.value[f], 1e-15)
+        << "face " << f;
+  });
+  EXPECT_GT(expected, 0);
+  EXPECT_EQ(blended, expected);
+  EXPECT_THROW(transfer::blend_tent_mean<Dim>(g, p, bins, patches.face_mask(), 1.5, out), Error);
+  EXPECT_THROW(transfer::blend_tent_mean<Dim>(g, p, bins, patches.face_mask(), std::nan(""), out), Error);
 }
 
 }  // namespace
