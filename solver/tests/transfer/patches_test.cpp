@@ -294,22 +294,40 @@ TYPED_TEST(PatchesTest, TheRbfTransferSkipsPatchFacesAndTheVelocityFieldUsesTheP
   EXPECT_GT(other, 0);
 }
 
+/// A random non-graded tree (level jumps up to 3), its patches, and particles seeded in it with
+/// random velocities in [-1, 1] (C = 0), binned: the tent tests' set-up.
+template <int Dim>
+struct RandomTents {
+  tree::CellGraph<Dim> g;
+  transfer::UniformPatches<Dim> patches;
+  particles::Particles<Dim> p;
+  particles::CellBins bins;
+
+  RandomTents(std::uint64_t tree_seed, std::uint64_t particle_seed, std::uint64_t velocity_seed)
+      : g(random_tree(tree_seed)), patches(g, g.cell_ids()), p(seeded_with_affine<Dim>(g, particle_seed)) {
+    particles::bin_particles<Dim>(g, p.x, bins);
+    std::mt19937_64 rng(velocity_seed);
+    std::uniform_real_distribution<double> val(-1.0, 1.0);
+    for (auto& v : p.v)
+      for (int k = 0; k < Dim; ++k) v[k] = val(rng);
+  }
+  static tree::CellGraph<Dim> random_tree(std::uint64_t seed) {
+    tree::CellGraphOptions<Dim> options;
+    options.max_jump = 3;
+    const Box<Dim> domain{Vec<Dim>::Constant(-1.0), Vec<Dim>::Constant(1.0)};
+    return tree::random<Dim>(domain, seed, 2, Dim == 2 ? 6 : 4, 0.3, options);
+  }
+};
+
 TYPED_TEST(PatchesTest, TentWeightsStayInTheParticlesRangeAndReproduceAffineFieldsWithTheirGradient) {
   constexpr int Dim = TypeParam::value;
-  tree::CellGraphOptions<Dim> options;
-  options.max_jump = 3;
-  const Box<Dim> domain{Vec<Dim>::Constant(-1.0), Vec<Dim>::Constant(1.0)};
-  const auto g = tree::random<Dim>(domain, 17, 2, Dim == 2 ? 6 : 4, 0.3, options);
-  const transfer::UniformPatches<Dim> patches(g, g.cell_ids());
-  auto p = seeded_with_affine<Dim>(g, 3);
+  RandomTents<Dim> t(17, 3, 8);
+  const auto& g = t.g;
+  const auto& patches = t.patches;
+  auto& p = t.p;
+  const auto& bins = t.bins;
   const int apic = p.find_field("apic");
-  particles::CellBins bins;
-  particles::bin_particles<Dim>(g, p.x, bins);
   // Random velocities, C = 0: every face within the range of the particles' values.
-  std::mt19937_64 rng(8);
-  std::uniform_real_distribution<double> val(-1.0, 1.0);
-  for (auto& v : p.v)
-    for (int k = 0; k < Dim; ++k) v[k] = val(rng);
   transfer::FaceValues out;
   out.reset(g.face_capacity());
   const transfer::TransferReport r =
@@ -348,18 +366,13 @@ TYPED_TEST(PatchesTest, TentWeightsStayInTheParticlesRangeAndReproduceAffineFiel
 
 TYPED_TEST(PatchesTest, TheTentShareBlendsOnlyTheFacesTheRbfSetAndLeavesTheRest) {
   constexpr int Dim = TypeParam::value;
-  tree::CellGraphOptions<Dim> options;
-  options.max_jump = 3;
-  const Box<Dim> domain{Vec<Dim>::Constant(-1.0), Vec<Dim>::Constant(1.0)};
-  const auto g = tree::random<Dim>(domain, 23, 2, Dim == 2 ? 6 : 4, 0.3, options);
-  const transfer::UniformPatches<Dim> patches(g, g.cell_ids());
-  auto p = seeded_with_affine<Dim>(g, 5);
-  particles::CellBins bins;
-  particles::bin_particles<Dim>(g, p.x, bins);
-  std::mt19937_64 rng(3);
+  RandomTents<Dim> t(23, 5, 3);
+  const auto& g = t.g;
+  const auto& patches = t.patches;
+  const auto& p = t.p;
+  const auto& bins = t.bins;
+  std::mt19937_64 rng(4);
   std::uniform_real_distribution<double> val(-1.0, 1.0);
-  for (auto& v : p.v)
-    for (int k = 0; k < Dim; ++k) v[k] = val(rng);
   // The faces as a transfer left them: arbitrary values, every third face unknown.
   transfer::FaceValues before;
   before.reset(g.face_capacity());
