@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 #include "liquid/core/error.hpp"
 #include "liquid/rbf/polynomial.hpp"
@@ -39,9 +40,14 @@ template <int Dim>
 void candidates(const tree::CellGraph<Dim>& graph, std::span<const tree::CellId> seeds, const Vec<Dim>& at,
                 StencilRule rule, int n_target, std::vector<tree::CellId>& out, std::size_t& n_core) {
   thread_local std::vector<tree::CellId> ring;
+  thread_local std::vector<std::pair<double, tree::CellId>> keyed;
   out.clear();
   n_core = 0;
   auto add_ring = [&](int k) {
+    if (seeds.size() == 1) {  // one k-ring: already without duplicates, and it holds every smaller ring
+      graph.k_ring(seeds[0], k, out);
+      return;
+    }
     for (tree::CellId s : seeds) {
       graph.k_ring(s, k, ring);
       out.insert(out.end(), ring.begin(), ring.end());
@@ -49,9 +55,13 @@ void candidates(const tree::CellGraph<Dim>& graph, std::span<const tree::CellId>
     std::sort(out.begin(), out.end());
     out.erase(std::unique(out.begin(), out.end()), out.end());
   };
-  auto by_distance = [&](tree::CellId a, tree::CellId b) {
-    const double da = (graph.centre(a) - at).squaredNorm(), db = (graph.centre(b) - at).squaredNorm();
-    return da != db ? da < db : a < b;
+  // Nearest first, ties by id: each centre's distance once, not once per comparison.
+  auto sort_by_distance = [&](std::vector<tree::CellId>::iterator first,
+                              std::vector<tree::CellId>::iterator last) {
+    keyed.clear();
+    for (auto it = first; it != last; ++it) keyed.emplace_back((graph.centre(*it) - at).squaredNorm(), *it);
+    std::sort(keyed.begin(), keyed.end());
+    for (const auto& [d, c] : keyed) *first++ = c;
   };
   const int max_k = 6;
   switch (rule) {
@@ -73,7 +83,7 @@ void candidates(const tree::CellGraph<Dim>& graph, std::span<const tree::CellId>
           area += std::ldexp(1.0, -(Dim - 1) * std::max(0, graph.level(c) - ref_level));
         if (2.0 * area >= n_target) break;
       }
-      std::sort(out.begin(), out.end(), by_distance);
+      sort_by_distance(out.begin(), out.end());
       return;
     }
     case StencilRule::nearest: {
@@ -81,12 +91,12 @@ void candidates(const tree::CellGraph<Dim>& graph, std::span<const tree::CellId>
         add_ring(k);
         if (static_cast<int>(out.size()) >= 2 * n_target) break;
       }
-      std::sort(out.begin(), out.end(), by_distance);
+      sort_by_distance(out.begin(), out.end());
       return;
     }
     case StencilRule::face_grown: {
       add_ring(1);
-      std::sort(out.begin(), out.end(), by_distance);
+      sort_by_distance(out.begin(), out.end());
       n_core = out.size();
       if (static_cast<int>(out.size()) >= n_target) return;
       std::vector<tree::CellId> first(out.begin(), out.end());
@@ -98,7 +108,7 @@ void candidates(const tree::CellGraph<Dim>& graph, std::span<const tree::CellId>
       std::sort(first_by_id.begin(), first_by_id.end());
       for (tree::CellId c : out)
         if (!std::binary_search(first_by_id.begin(), first_by_id.end(), c)) rest.push_back(c);
-      std::sort(rest.begin(), rest.end(), by_distance);
+      sort_by_distance(rest.begin(), rest.end());
       out = first;
       out.insert(out.end(), rest.begin(), rest.end());
       return;
