@@ -118,10 +118,8 @@ struct PicOptions {
   bool tent_at_level_changes = false;
   /// With uniform_patches and the RBF particle -> face at level changes: the share of the tents'
   /// positive mean (C = 0) blended into each level-change face, v_f = (1 - s) v_RBF + s v_tent
-  /// (transfer::blend_tent_mean). 3D: 0.1. Without it a 3D still pool's noise grows (+0.045 / s in the
-  /// cube at finest 4, 100-fold over 120 s); with it the noise stays flat, for more dissipation
-  /// (held particles in 3D drift 0.115 from the field after 40 steps against 0.078). 2D: 0, whose
-  /// pools do not grow without it and whose vortex would lose 13% of its accuracy (scene key
+  /// (transfer::blend_tent_mean). The average damps the smooth modes the RBF alone lets a 3D still
+  /// pool grow, at some cost in dissipation; 2D pools do not grow, so 2D takes 0 (scene key
   /// `[solver] level_change_tent_share`; measured: docs/findings/transfer-stability.md).
   double level_change_tent_share = Dim == 3 ? 0.1 : 0.0;
   /// With uniform_patches: the particles outside the patches take the RBF interpolant's gradient as

@@ -104,9 +104,9 @@ TransferReport tent_to_faces(const tree::CellGraph<Dim>& graph, const particles:
 
 /// Blends `share` of the tents' mean (tent_to_faces with C = 0) into every face `out` already knows
 /// and `skip` leaves: v_f <- (1 - share) v_f + share v_tent wherever a tent reaches a particle (the
-/// other faces keep v_f). The average damps what the RBF interpolant, which is not an average, lets
-/// grow: a 3D still pool's smooth modes gain about 1e-3 a step without it
-/// (docs/findings/transfer-stability.md). share = 0 leaves `out` as it is. Returns the faces blended.
+/// other faces keep v_f). The average damps the smooth modes that the RBF interpolant, which is not
+/// an average, lets grow (docs/findings/transfer-stability.md). share = 0 leaves `out` as it is.
+/// Returns the faces blended.
 template <int Dim>
 long blend_tent_mean(const tree::CellGraph<Dim>& graph, const particles::Particles<Dim>& particles,
                      const particles::CellBins& bins, std::span<const std::uint8_t> skip, double share,

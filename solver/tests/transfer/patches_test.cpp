@@ -327,7 +327,7 @@ TYPED_TEST(PatchesTest, TentWeightsStayInTheParticlesRangeAndReproduceAffineFiel
   auto& p = t.p;
   const auto& bins = t.bins;
   const int apic = p.find_field("apic");
-  // Random velocities, C = 0: every face within the range of the particles' values.
+  // The set-up's random velocities with C = 0: every face within the range of the particles' values.
   transfer::FaceValues out;
   out.reset(g.face_capacity());
   const transfer::TransferReport r =
