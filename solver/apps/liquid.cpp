@@ -134,16 +134,15 @@ void echo(const scene::Scene<Dim>& s, const scene::RunSettings& settings, bool r
         "  projection  orthogonal in the faces' transferred masses (lightest face {} of a full cell's); it "
         "does not keep a still pool still (hydrostatic-pool)\n",
         o.min_face_mass);
-  const bool amg = o.solver.kind == linalg::SolverKind::bicgstab_amg ||
-                   o.solver.kind == linalg::SolverKind::gmres_amg ||
-                   o.solver.kind == linalg::SolverKind::cg_amg;
-  fmt::print("  ppe         {} to {:.1e}{}{}\n", linalg::to_string(o.solver.kind), o.solver.tolerance,
+  const bool amg = linalg::uses_amg(o.solver.kind);
+  fmt::print("  ppe         {} to {:.1e}{}{}{}\n", linalg::to_string(o.solver.kind), o.solver.tolerance,
              !amg ? std::string()
              : o.solver.amg.reuse_factor > 0
                  ? fmt::format("; hierarchy kept while the layout stays (rebuilt past "
                                "{}x its first iterations)",
                                o.solver.amg.reuse_factor)
                  : std::string("; a new hierarchy every step"),
+             o.ppe_fallback && !amg ? "; bicgstab-amg where it does not converge" : "",
              o.continue_on_ppe_failure ? ", going on when it does not converge" : "");
   if (linalg::needs_symmetric(o.solver.kind))
     fmt::print(
@@ -285,9 +284,11 @@ void print_summary(const scene::RunSummary& s, const std::string& name, int dim)
   fmt::print("  seconds per step by phase:");
   for (const auto& [phase, t] : s.seconds) fmt::print(" {} {:.4f}", phase, t);
   fmt::print(
-      "\n  PPE: {} iterations in all ({:.1f} per step){}{}\n", s.ppe_iterations,
+      "\n  PPE: {} iterations in all ({:.1f} per step){}{}{}\n", s.ppe_iterations,
       static_cast<double>(s.ppe_iterations) / std::max<long>(1, s.steps),
-      s.ppe_reused ? fmt::format(", {} of {} steps kept the AMG hierarchy", s.ppe_reused, s.steps) : "",
+      s.ppe_reused ? fmt::format(", {} of {} steps kept the last step's preconditioner", s.ppe_reused, s.steps)
+                   : "",
+      s.ppe_fallbacks ? fmt::format(", {} solves fell back to bicgstab-amg", s.ppe_fallbacks) : "",
       s.ppe_failures ? fmt::format(", {} steps did not converge", s.ppe_failures) : "");
   fmt::print("  wall time {:.2f} s\n", s.wall);
 }
@@ -326,11 +327,13 @@ void write_json(const std::string& path, const scene::RunSummary& s, const std::
       "{{\n  \"scene\": \"{}\", \"dimension\": {}, \"steps\": {}, \"time\": {:.9g}, \"threads\": {},\n"
       "  \"fluid_cells\": {:.6g}, \"cells\": {:.6g}, \"particles\": {:.6g},\n"
       "  \"regular_cells\": {:.6g}, \"regular_particles\": {:.6g},\n"
-      "  \"ppe_iterations\": {}, \"ppe_failures\": {}, \"ppe_reused\": {}, \"wall_seconds\": {:.6g},\n"
+      "  \"ppe_iterations\": {}, \"ppe_failures\": {}, \"ppe_reused\": {}, \"ppe_fallbacks\": {},\n"
+      "  \"wall_seconds\": {:.6g},\n"
       "  \"peak_memory_mb\": {:.1f},\n"
       "  \"seconds_per_step\": {{{}}}\n}}\n",
       name, dim, s.steps, s.time, s.threads, s.fluid_cells, s.cells, s.particles, s.regular_cells,
-      s.regular_particles, s.ppe_iterations, s.ppe_failures, s.ppe_reused, s.wall, peak_memory_mb(), phases);
+      s.regular_particles, s.ppe_iterations, s.ppe_failures, s.ppe_reused, s.ppe_fallbacks, s.wall, peak_memory_mb(),
+      phases);
   liquid::io::write_text_file(path, text);
 }
 

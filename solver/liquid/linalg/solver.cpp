@@ -44,6 +44,10 @@ bool needs_symmetric(SolverKind kind) {
   return kind == SolverKind::cg_jacobi || kind == SolverKind::cg_ic || kind == SolverKind::cg_amg;
 }
 
+bool uses_amg(SolverKind kind) {
+  return kind == SolverKind::bicgstab_amg || kind == SolverKind::gmres_amg || kind == SolverKind::cg_amg;
+}
+
 SolverKind nonsymmetric_counterpart(SolverKind kind) {
   switch (kind) {
     case SolverKind::cg_jacobi:

@@ -53,6 +53,8 @@ std::string to_string(SolverKind kind);
 /// Whether `kind` is a conjugate-gradient solver, which needs a symmetric positive (semi)definite
 /// matrix.
 bool needs_symmetric(SolverKind kind);
+/// Whether `kind` is preconditioned by algebraic multigrid.
+bool uses_amg(SolverKind kind);
 /// The BiCGSTAB solver with the preconditioner of a conjugate-gradient `kind` (`kind` itself for any
 /// other): for a symmetric indefinite or nonsymmetric system.
 SolverKind nonsymmetric_counterpart(SolverKind kind);

@@ -532,6 +532,7 @@ void AdaptivePic<Dim>::project_gravity(double dt, PicStepReport& r) {
   PicStepReport gravity;
   solve_pressure(gravity);
   r.ppe_gravity = gravity.ppe;
+  r.ppe_fallbacks += gravity.ppe_fallbacks;
   project(dt);  // keeps the pressure's normal derivative in gravity_gradient_
   volume_pass_ = false;
   gravity_pressure_ = p_;
@@ -719,7 +720,25 @@ void AdaptivePic<Dim>::solve_pressure(PicStepReport& r) {
     }
     solver = bordered_ppe_solver_.get();
   }
+  const linalg::Vector guess = x;
   r.ppe = solver->solve(system_.A, system_.b, x);
+  if (!r.ppe.converged() && options_.ppe_fallback && !linalg::uses_amg(options_.solver.kind)) {
+    // Once more with AMG, from where the first solver got to (or from the guess after a breakdown).
+    if (!fallback_ppe_solver_) {
+      linalg::SolveOptions o = options_.solver;
+      o.kind = linalg::SolverKind::bicgstab_amg;
+      o.max_iterations = linalg::SolveOptions{}.max_iterations;  // AMG's own cap, not the first solver's
+      fallback_ppe_solver_ = linalg::make_solver(o);
+    }
+    if (!x.allFinite() || x.size() != guess.size()) x = guess;
+    const linalg::SolveStats first = r.ppe;
+    r.ppe = fallback_ppe_solver_->solve(system_.A, system_.b, x);
+    r.ppe.solver = first.solver + ", then " + r.ppe.solver;
+    r.ppe.iterations += first.iterations;
+    r.ppe.setup_seconds += first.setup_seconds;
+    r.ppe.solve_seconds += first.solve_seconds;
+    ++r.ppe_fallbacks;
+  }
   if (!solid_.empty()) extend_into_solid(x);
   if (!r.ppe.converged() && !options_.continue_on_ppe_failure)
     throw Error(

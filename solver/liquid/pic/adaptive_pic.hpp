@@ -141,6 +141,10 @@ struct PicOptions {
   mac::PoissonOptions poisson = paper_poisson();
   linalg::SolveOptions solver{linalg::SolverKind::bicgstab_ilut, 1e-8};
   bool continue_on_ppe_failure = false;  ///< false: a PPE that does not converge stops the run
+  /// A PPE solve by a solver without AMG that does not converge (or breaks down) is retried once by
+  /// BiCGSTAB + AMG, with AMG's own iteration cap, from the iterate it reached: a cheap default
+  /// solver cannot stop a run that AMG would carry (scene key `[ppe] fallback`).
+  bool ppe_fallback = true;
   PicSurface surface = PicSurface::air_cells;
   /// levelset surface: the particle radius r, in finest cells. A smaller r makes the surface
   /// bumpier, a larger one moves it out. Why this default: docs/findings/pic-solver.md.
@@ -219,6 +223,7 @@ struct PicStepReport {
   int n_substeps = 1;
   linalg::SolveStats ppe;
   linalg::SolveStats ppe_gravity;  ///< PicProjection::split: the gravity pass's solve (ppe: the mass pass's)
+  int ppe_fallbacks = 0;           ///< solves of this step retried with AMG (PicOptions::ppe_fallback)
   transfer::TransferReport p2g, g2p;
   long unknown_faces = 0;  ///< faces no particle reached, before extrapolation
   /// PicOptions::uniform_patches: the cells near the liquid in uniform patches (APIC transfers) and
@@ -369,6 +374,7 @@ class AdaptivePic {
   /// a conjugate-gradient solver cannot take it, so those steps use BiCGSTAB with the same
   /// preconditioner (made when first needed).
   std::unique_ptr<linalg::LinearSolver> bordered_ppe_solver_;
+  std::unique_ptr<linalg::LinearSolver> fallback_ppe_solver_;  // PicOptions::ppe_fallback, made when first needed
   PhaseTimer timer_;
   double time_ = 0.0;
   long step_ = 0;

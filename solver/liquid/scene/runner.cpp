@@ -352,6 +352,7 @@ const pic::PicStepReport& SceneRunner<Dim>::step() {
       last_.ppe.iterations + last_.ppe_gravity.iterations;  // the split projection solves twice
   ppe_failures_ += (last_.ppe.converged() ? 0 : 1) + (last_.ppe_gravity.converged() ? 0 : 1);
   ppe_reused_ += last_.ppe.hierarchy_reused ? 1 : 0;
+  ppe_fallbacks_ += last_.ppe_fallbacks;
   sum_fluid_ += static_cast<double>(last_.n_fluid_cells);
   sum_cells_ += static_cast<double>(last_.n_cells);
   sum_particles_ += static_cast<double>(last_.n_particles);
@@ -455,6 +456,7 @@ std::string SceneRunner<Dim>::checkpoint() {
   w.put_scalar("run/steps", static_cast<std::int64_t>(steps_));
   w.put_scalar("run/ppe_iterations", static_cast<std::int64_t>(ppe_iterations_));
   w.put_scalar("run/ppe_failures", static_cast<std::int64_t>(ppe_failures_));
+  w.put_scalar("run/ppe_fallbacks", static_cast<std::int64_t>(ppe_fallbacks_));
   w.put_scalar("run/ppe_reused", static_cast<std::int64_t>(ppe_reused_));
   const std::vector<double> sums = {sum_fluid_, sum_cells_, sum_particles_, sum_regular_cells_,
                                     sum_regular_particles_};
@@ -520,13 +522,19 @@ SceneRunner<Dim> SceneRunner<Dim>::resume(const std::string& checkpoint, RunSett
   run.ppe_failures_ = r.scalar_int("run/ppe_failures");
   // Checkpoints written before the count existed lack it: those runs kept no hierarchy.
   run.ppe_reused_ = r.has("run/ppe_reused") ? r.scalar_int("run/ppe_reused") : 0;
+  run.ppe_fallbacks_ = r.has("run/ppe_fallbacks") ? r.scalar_int("run/ppe_fallbacks") : 0;
   const std::vector<double> sums = r.doubles("run/sums");
   LIQUID_VERIFY(sums.size() == 5, "{}: run/sums has {} entries, expected 5", checkpoint, sums.size());
   run.sum_fluid_ = sums[0], run.sum_cells_ = sums[1], run.sum_particles_ = sums[2];
   run.sum_regular_cells_ = sums[3], run.sum_regular_particles_ = sums[4];
   if (run.io_->series) {
     std::vector<io::SeriesFrame> frames = detail::get_series(r, run.settings_.out);
-    if (!frames.empty()) run.io_->series->restore(std::move(frames));
+    try {
+      if (!frames.empty()) run.io_->series->restore(std::move(frames));
+    } catch (const Error& e) {
+      // The frames came from the checkpoint (run/series): a damaged one is its fault.
+      throw Error(fmt::format("{}: run/series: {}", checkpoint, e.what()));
+    }
   }
   return run;
 }
@@ -549,6 +557,7 @@ RunSummary SceneRunner<Dim>::summary() const {
   s.ppe_iterations = ppe_iterations_;
   s.ppe_failures = ppe_failures_;
   s.ppe_reused = ppe_reused_;
+  s.ppe_fallbacks = ppe_fallbacks_;
   s.threads = omp_get_max_threads();
   s.wall = wall_;
   return s;

@@ -70,6 +70,7 @@ struct RunSummary {
   std::map<std::string, double> seconds;  ///< per phase, average per step
   long ppe_iterations = 0;                ///< total (both solves of the split projection)
   long ppe_failures = 0;                  ///< PPE solves that did not converge (continue_on_failure)
+  long ppe_fallbacks = 0;  ///< PPE solves retried with AMG after the first solver failed (PicOptions::ppe_fallback)
   long ppe_reused = 0;  ///< steps whose PPE kept the last step's AMG hierarchy (same layout)
   int threads = 1;
   double wall = 0.0;  ///< seconds of the whole run (frames and checkpoints included)
@@ -113,7 +114,7 @@ class SceneRunner {
   int frame_ = 0;
   double next_frame_ = 0.0;
   // Sums for the summary (restored from checkpoints so that a resumed run reports the whole run).
-  long steps_ = 0, ppe_iterations_ = 0, ppe_failures_ = 0, ppe_reused_ = 0;
+  long steps_ = 0, ppe_iterations_ = 0, ppe_failures_ = 0, ppe_reused_ = 0, ppe_fallbacks_ = 0;
   double sum_fluid_ = 0, sum_cells_ = 0, sum_particles_ = 0, sum_regular_cells_ = 0,
          sum_regular_particles_ = 0;
   double wall_ = 0.0;

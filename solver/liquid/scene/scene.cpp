@@ -788,7 +788,7 @@ void read_ppe(const TableReader& top, Scene<Dim>& s) {
   pic::PicOptions<Dim>& o = s.pic;
   const toml::table* t = top.table("ppe");
   const TableReader r(t ? *t : empty, path, "ppe",
-                      {"solver", "tolerance", "max_iterations", "continue_on_failure", "amg_reuse"});
+                      {"solver", "tolerance", "max_iterations", "continue_on_failure", "amg_reuse", "fallback"});
   const std::vector<std::string> names = linalg::solver_names();
   s.ppe_solver_given = r.has("solver");
   o.solver.kind = s.ppe_solver_given ? linalg::parse_solver(r.choice("solver", names))
@@ -799,6 +799,7 @@ void read_ppe(const TableReader& top, Scene<Dim>& s) {
   o.solver.max_iterations =
       static_cast<int>(r.integer_in("max_iterations", 1, 10000000, o.solver.max_iterations));
   o.continue_on_ppe_failure = r.boolean("continue_on_failure", false);
+  o.ppe_fallback = r.boolean("fallback", o.ppe_fallback);
   o.solver.amg.reuse_factor = r.number("amg_reuse", o.solver.amg.reuse_factor);
   LIQUID_VERIFY(o.solver.amg.reuse_factor >= 0.0,
                 "{}: must be 0 (a new AMG hierarchy every step) or positive (found {})", r.where("amg_reuse"),
@@ -1056,7 +1057,7 @@ template void check_sph_table<3>(const Scene<3>&);
 
 linalg::SolverKind default_ppe_solver(bool adaptive, int dim) {
   if (!adaptive) return linalg::SolverKind::cg_jacobi;
-  return dim == 3 ? linalg::SolverKind::bicgstab_amg : linalg::SolverKind::bicgstab_ilut;
+  return dim == 3 ? linalg::SolverKind::bicgstab_jacobi : linalg::SolverKind::bicgstab_ilut;
 }
 
 std::string scenes_folder() {

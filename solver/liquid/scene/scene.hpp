@@ -134,9 +134,10 @@ template <int Dim>
 double sph_sound_speed(const Scene<Dim>& scene);
 
 /// The PPE solver of a scene that names none: for the adaptive tree's non-symmetric matrix
-/// BiCGSTAB+ILUT in 2D and BiCGSTAB+AMG in 3D; Jacobi-preconditioned CG for the regular grid's symmetric one
-/// (the paper's regular baseline). Each was the fastest `ppe` phase on the built-in scenes; the 3D
-/// tree's AMG keeps its hierarchy while the layout stays (AmgOptions::reuse_factor).
+/// BiCGSTAB+ILUT in 2D and BiCGSTAB+Jacobi in 3D (a moving surface makes AMG rebuild its hierarchy
+/// every step, and that setup outweighs the iterations it saves); Jacobi-preconditioned CG for the
+/// regular grid's symmetric one (the paper's regular baseline). Each was the fastest `ppe` phase on
+/// the built-in scenes; a solve that does not converge falls back to AMG (PicOptions::ppe_fallback).
 /// Why these defaults: docs/findings/amg.md.
 linalg::SolverKind default_ppe_solver(bool adaptive, int dim);
 

@@ -305,7 +305,12 @@ SphSceneRunner<Dim> SphSceneRunner<Dim>::resume(const std::string& checkpoint, R
   run.sum_per_level_ = per_level;
   if (run.io_->series) {
     std::vector<io::SeriesFrame> frames = detail::get_series(r, run.settings_.out);
-    if (!frames.empty()) run.io_->series->restore(std::move(frames));
+    try {
+      if (!frames.empty()) run.io_->series->restore(std::move(frames));
+    } catch (const Error& e) {
+      // The frames came from the checkpoint (run/series): a damaged one is its fault.
+      throw Error(fmt::format("{}: run/series: {}", checkpoint, e.what()));
+    }
   }
   return run;
 }

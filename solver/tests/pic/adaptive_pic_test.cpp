@@ -392,6 +392,7 @@ TEST(AdaptivePic, BadOptionsAndFailuresAreReported) {
   o.solver.max_iterations = 1;
   o.solver.tolerance = 1e-14;
   o.solver.kind = linalg::SolverKind::bicgstab_jacobi;
+  o.ppe_fallback = false;  // AMG would carry it (APpeTheFirstSolverCannotFinishFallsBackToAmg)
   pic::AdaptivePic<2> sim(o);
   EXPECT_THROW(sim.advance(0.01), Error);  // not seeded
   sim.seed(levelset::box<2>({Vec<2>::Zero(), Vec<2>(0.5, 0.5)}));
@@ -402,6 +403,32 @@ TEST(AdaptivePic, BadOptionsAndFailuresAreReported) {
     EXPECT_NE(std::string(e.what()).find("did not converge"), std::string::npos) << e.what();
   }
   EXPECT_THROW(sim.advance(-1.0), Error);
+}
+
+TEST(AdaptivePic, APpeTheFirstSolverCannotFinishFallsBackToAmg) {
+  // Two Jacobi-BiCGSTAB iterations cannot reach 1e-8: with the fallback the step is solved by AMG
+  // from there and says so; without it the run stops.
+  for (bool fallback : {true, false}) {
+    pic::PicOptions<2> o;
+    o.finest_level = 4;
+    o.coarse_level = 2;
+    o.solver.kind = linalg::SolverKind::bicgstab_jacobi;
+    o.solver.max_iterations = 2;
+    o.solver.tolerance = 1e-8;
+    o.ppe_fallback = fallback;
+    pic::AdaptivePic<2> sim(o);
+    sim.seed(levelset::box<2>({Vec<2>::Zero(), Vec<2>(0.5, 0.5)}));
+    if (!fallback) {
+      EXPECT_THROW(sim.advance(0.01), Error);
+      continue;
+    }
+    const pic::PicStepReport r = sim.advance(0.01);
+    EXPECT_EQ(r.ppe_fallbacks, 1);
+    EXPECT_TRUE(r.ppe.converged()) << r.ppe.describe();
+    EXPECT_LE(r.ppe.relative_residual, 1e-8);
+    EXPECT_GT(r.ppe.iterations, 2);
+    EXPECT_NE(r.ppe.solver.find("bicgstab-jacobi, then bicgstab-amg"), std::string::npos) << r.ppe.solver;
+  }
 }
 
 TEST(AdaptivePic, StillPoolAroundASubmergedObstacleStaysStill) {
