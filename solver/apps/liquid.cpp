@@ -283,13 +283,13 @@ void print_summary(const scene::RunSummary& s, const std::string& name, int dim)
       "   gives the measured figures: liquid run SCENE --method apic, or ci/bench-scenes)\n");
   fmt::print("  seconds per step by phase:");
   for (const auto& [phase, t] : s.seconds) fmt::print(" {} {:.4f}", phase, t);
-  fmt::print(
-      "\n  PPE: {} iterations in all ({:.1f} per step){}{}{}\n", s.ppe_iterations,
-      static_cast<double>(s.ppe_iterations) / std::max<long>(1, s.steps),
-      s.ppe_reused ? fmt::format(", {} of {} steps kept the last step's preconditioner", s.ppe_reused, s.steps)
-                   : "",
-      s.ppe_fallbacks ? fmt::format(", {} solves fell back to bicgstab-amg", s.ppe_fallbacks) : "",
-      s.ppe_failures ? fmt::format(", {} steps did not converge", s.ppe_failures) : "");
+  fmt::print("\n  PPE: {} iterations in all ({:.1f} per step){}{}{}\n", s.ppe_iterations,
+             static_cast<double>(s.ppe_iterations) / std::max<long>(1, s.steps),
+             s.ppe_reused
+                 ? fmt::format(", {} of {} steps kept the last step's preconditioner", s.ppe_reused, s.steps)
+                 : "",
+             s.ppe_fallbacks ? fmt::format(", {} solves fell back to bicgstab-amg", s.ppe_fallbacks) : "",
+             s.ppe_failures ? fmt::format(", {} steps did not converge", s.ppe_failures) : "");
   fmt::print("  wall time {:.2f} s\n", s.wall);
 }
 
@@ -332,8 +332,8 @@ void write_json(const std::string& path, const scene::RunSummary& s, const std::
       "  \"peak_memory_mb\": {:.1f},\n"
       "  \"seconds_per_step\": {{{}}}\n}}\n",
       name, dim, s.steps, s.time, s.threads, s.fluid_cells, s.cells, s.particles, s.regular_cells,
-      s.regular_particles, s.ppe_iterations, s.ppe_failures, s.ppe_reused, s.ppe_fallbacks, s.wall, peak_memory_mb(),
-      phases);
+      s.regular_particles, s.ppe_iterations, s.ppe_failures, s.ppe_reused, s.ppe_fallbacks, s.wall,
+      peak_memory_mb(), phases);
   liquid::io::write_text_file(path, text);
 }
 

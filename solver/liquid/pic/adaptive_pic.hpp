@@ -374,7 +374,8 @@ class AdaptivePic {
   /// a conjugate-gradient solver cannot take it, so those steps use BiCGSTAB with the same
   /// preconditioner (made when first needed).
   std::unique_ptr<linalg::LinearSolver> bordered_ppe_solver_;
-  std::unique_ptr<linalg::LinearSolver> fallback_ppe_solver_;  // PicOptions::ppe_fallback, made when first needed
+  /// PicOptions::ppe_fallback's BiCGSTAB + AMG, made when first needed.
+  std::unique_ptr<linalg::LinearSolver> fallback_ppe_solver_;
   PhaseTimer timer_;
   double time_ = 0.0;
   long step_ = 0;

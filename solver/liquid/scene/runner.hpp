@@ -70,8 +70,9 @@ struct RunSummary {
   std::map<std::string, double> seconds;  ///< per phase, average per step
   long ppe_iterations = 0;                ///< total (both solves of the split projection)
   long ppe_failures = 0;                  ///< PPE solves that did not converge (continue_on_failure)
-  long ppe_fallbacks = 0;  ///< PPE solves retried with AMG after the first solver failed (PicOptions::ppe_fallback)
-  long ppe_reused = 0;  ///< steps whose PPE kept the last step's AMG hierarchy (same layout)
+  /// PPE solves retried with AMG after the first solver failed (PicOptions::ppe_fallback).
+  long ppe_fallbacks = 0;
+  long ppe_reused = 0;  ///< steps whose PPE kept the last step's preconditioner (same matrix or layout)
   int threads = 1;
   double wall = 0.0;  ///< seconds of the whole run (frames and checkpoints included)
 };

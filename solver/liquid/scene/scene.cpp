@@ -787,8 +787,9 @@ void read_ppe(const TableReader& top, Scene<Dim>& s) {
   static const toml::table empty;
   pic::PicOptions<Dim>& o = s.pic;
   const toml::table* t = top.table("ppe");
-  const TableReader r(t ? *t : empty, path, "ppe",
-                      {"solver", "tolerance", "max_iterations", "continue_on_failure", "amg_reuse", "fallback"});
+  const TableReader r(
+      t ? *t : empty, path, "ppe",
+      {"solver", "tolerance", "max_iterations", "continue_on_failure", "amg_reuse", "fallback"});
   const std::vector<std::string> names = linalg::solver_names();
   s.ppe_solver_given = r.has("solver");
   o.solver.kind = s.ppe_solver_given ? linalg::parse_solver(r.choice("solver", names))
