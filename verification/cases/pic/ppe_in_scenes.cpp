@@ -42,6 +42,7 @@ Mean run_scene(bool adaptive, SolverKind kind, double end) {
   o.solver = linalg::to_string(kind);
   o.until = end;
   scene::apply_overrides<2>(o, scene);
+  scene.pic.ppe_fallback = false;  // each row is its solver alone: a failure counts, AMG does not step in
   scene::RunSettings settings;
   settings.overrides = o;
   settings.scene_path = path;
