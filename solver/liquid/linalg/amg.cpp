@@ -158,9 +158,7 @@ SolveStats AmgHierarchy::solve_rows(const SparseMatrix& rows, const Vector& b, V
   stats.solver = to_string(options.kind);
   stats.n_unknowns = n_global;
   const long n = rows.rows();
-  LIQUID_VERIFY(options.kind == SolverKind::bicgstab_amg || options.kind == SolverKind::gmres_amg ||
-                    options.kind == SolverKind::cg_amg,
-                "amg_solve_rows: solver {} is not an AMG solver", stats.solver);
+  LIQUID_VERIFY(uses_amg(options.kind), "amg_solve_rows: solver {} is not an AMG solver", stats.solver);
   LIQUID_VERIFY(rows.cols() == n_global && b.size() == n && first_row >= 0 && first_row + n <= n_global,
                 "{}: rows {}..{} ({} x {}) and right-hand side {} do not fit {} unknowns", stats.solver,
                 first_row, first_row + n, n, rows.cols(), b.size(), n_global);

@@ -708,9 +708,13 @@ void AdaptivePic<Dim>::extend_into_solid(linalg::Vector& x) const {
 
 template <int Dim>
 void AdaptivePic<Dim>::solve_pressure(PicStepReport& r) {
-  linalg::Vector x(system_.A.rows());
-  x.setZero();
-  for (long i = 0; i < system_.n_unknowns(); ++i) x[i] = p_[system_.layout.cell_of_dof[i]];
+  // The guess: the last step's pressure (p_ holds it until the solve is done).
+  const auto guess = [this](linalg::Vector& x) {
+    x.setZero(system_.A.rows());
+    for (long i = 0; i < system_.n_unknowns(); ++i) x[i] = p_[system_.layout.cell_of_dof[i]];
+  };
+  linalg::Vector x;
+  guess(x);
   linalg::LinearSolver* solver = ppe_solver_.get();
   if (system_.bordered && linalg::needs_symmetric(options_.solver.kind)) {
     if (!bordered_ppe_solver_) {
@@ -720,7 +724,6 @@ void AdaptivePic<Dim>::solve_pressure(PicStepReport& r) {
     }
     solver = bordered_ppe_solver_.get();
   }
-  const linalg::Vector guess = x;
   r.ppe = solver->solve(system_.A, system_.b, x);
   if (!r.ppe.converged() && options_.ppe_fallback && !linalg::uses_amg(options_.solver.kind)) {
     // Once more with AMG, from where the first solver got to (or from the guess after a breakdown).
@@ -730,7 +733,7 @@ void AdaptivePic<Dim>::solve_pressure(PicStepReport& r) {
       o.max_iterations = linalg::SolveOptions{}.max_iterations;  // AMG's own cap, not the first solver's
       fallback_ppe_solver_ = linalg::make_solver(o);
     }
-    if (!x.allFinite() || x.size() != guess.size()) x = guess;
+    if (!x.allFinite()) guess(x);
     const linalg::SolveStats first = r.ppe;
     r.ppe = fallback_ppe_solver_->solve(system_.A, system_.b, x);
     r.ppe.solver = first.solver + ", then " + r.ppe.solver;

@@ -36,5 +36,8 @@ void get_run_settings(const io::ArchiveReader& r, RunSettings& settings);
 /// `out` (the resumed run's folder) to the checkpoint's folder when the two differ.
 void put_series(io::ArchiveWriter& w, const io::SeriesWriter* series);
 std::vector<io::SeriesFrame> get_series(const io::ArchiveReader& r, const std::string& out);
+/// Restores into `series` the frames get_series() reads; a damaged frame is refused naming the
+/// checkpoint (r.path()) and run/series.
+void restore_series(const io::ArchiveReader& r, const std::string& out, io::SeriesWriter& series);
 
 }  // namespace liquid::scene::detail

@@ -181,6 +181,17 @@ std::vector<io::SeriesFrame> get_series(const io::ArchiveReader& r, const std::s
   return frames;
 }
 
+void restore_series(const io::ArchiveReader& r, const std::string& out, io::SeriesWriter& series) {
+  std::vector<io::SeriesFrame> frames = get_series(r, out);
+  if (frames.empty()) return;
+  try {
+    series.restore(std::move(frames));
+  } catch (const Error& e) {
+    // The frames came from the checkpoint: a damaged one is its fault.
+    throw Error(fmt::format("{}: run/series: {}", r.path(), e.what()));
+  }
+}
+
 }  // namespace detail
 
 bool checkpoint_is_sph(const std::string& path) {
@@ -528,13 +539,7 @@ SceneRunner<Dim> SceneRunner<Dim>::resume(const std::string& checkpoint, RunSett
   run.sum_fluid_ = sums[0], run.sum_cells_ = sums[1], run.sum_particles_ = sums[2];
   run.sum_regular_cells_ = sums[3], run.sum_regular_particles_ = sums[4];
   if (run.io_->series) {
-    std::vector<io::SeriesFrame> frames = detail::get_series(r, run.settings_.out);
-    try {
-      if (!frames.empty()) run.io_->series->restore(std::move(frames));
-    } catch (const Error& e) {
-      // The frames came from the checkpoint (run/series): a damaged one is its fault.
-      throw Error(fmt::format("{}: run/series: {}", checkpoint, e.what()));
-    }
+    detail::restore_series(r, run.settings_.out, *run.io_->series);
   }
   return run;
 }

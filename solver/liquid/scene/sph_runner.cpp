@@ -304,13 +304,7 @@ SphSceneRunner<Dim> SphSceneRunner<Dim>::resume(const std::string& checkpoint, R
   run.rested_ = counts[6], run.max_compression_ = sums[3];
   run.sum_per_level_ = per_level;
   if (run.io_->series) {
-    std::vector<io::SeriesFrame> frames = detail::get_series(r, run.settings_.out);
-    try {
-      if (!frames.empty()) run.io_->series->restore(std::move(frames));
-    } catch (const Error& e) {
-      // The frames came from the checkpoint (run/series): a damaged one is its fault.
-      throw Error(fmt::format("{}: run/series: {}", checkpoint, e.what()));
-    }
+    detail::restore_series(r, run.settings_.out, *run.io_->series);
   }
   return run;
 }

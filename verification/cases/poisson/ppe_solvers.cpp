@@ -56,10 +56,6 @@ std::string solver_label(SolverKind kind, int pmax) {
   return linalg::to_string(kind) + (pmax >= 0 ? fmt::format(" pmax{}", pmax) : "");
 }
 
-bool is_amg(SolverKind kind) {
-  return kind == SolverKind::bicgstab_amg || kind == SolverKind::gmres_amg || kind == SolverKind::cg_amg;
-}
-
 /// One solve's figures, kept for the flatness check and the paper's comparison.
 struct Solved {
   linalg::SolveStats stats;
@@ -141,8 +137,8 @@ void solve_tree(const std::string& name, const PoissonStudy<Dim>& study, const t
     if (job.pmax >= 0) o.amg.max_interpolation_entries = job.pmax;
     Solved s;
     s.stats = linalg::solve(system.A, system.b, x, o);
-    s.spmv_equivalents =
-        (s.stats.setup_seconds + s.stats.solve_seconds) / (is_amg(job.kind) ? t_spmv_one : t_spmv_all);
+    s.spmv_equivalents = (s.stats.setup_seconds + s.stats.solve_seconds) /
+                         (linalg::uses_amg(job.kind) ? t_spmv_one : t_spmv_all);
     s.assembly_seconds = t_assembly;
     if (s.stats.converged()) s.error = max_error<Dim>(graph, study, system, x);
     table.add_row({name, tree, long(level), system.n_unknowns(), solver_label(job.kind, job.pmax),
@@ -197,7 +193,7 @@ CaseResult run(const CaseOptions& options) {
              {"study", "tree", "solver", "tolerance", "iterations", "finest / coarsest", "rate per iteration",
               "iterations by rate", "finest / coarsest by rate"});
   for (const auto& [key, rows] : results) {
-    if (!is_amg(key.kind)) continue;
+    if (!linalg::uses_amg(key.kind)) continue;
     std::string its, rates, by_rate;
     std::vector<double> needed;
     bool all = true;
