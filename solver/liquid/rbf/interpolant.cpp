@@ -144,6 +144,33 @@ Eigen::MatrixXd Interpolant<Dim>::gradient(const Vec<Dim>& x) const {
 }
 
 template <int Dim>
+double Interpolant<Dim>::value_and_gradient(const Vec<Dim>& x, int column, double* grad) const {
+  LIQUID_VERIFY(coefficients_.size() > 0, "RBF interpolant evaluated before fit()");
+  LIQUID_VERIFY(column >= 0 && column < coefficients_.cols(), "RBF interpolant has no field {}", column);
+  const Vec<Dim> z = unit(x);
+  const int n = n_nodes();
+  const auto& system = *factors_->system;
+  double value = 0.0;
+  Vec<Dim> g = Vec<Dim>::Zero();
+  for (int j = 0; j < n; ++j) {
+    const Vec<Dim> d = z - factors_->nodes[j];
+    const double r = d.norm();
+    const double c = coefficients_(j, column);
+    value += system.kernel.value(r) * c;
+    const double factor = system.kernel.gradient_factor(r);
+    for (int k = 0; k < Dim; ++k) g[k] += factor * d[k] * c;
+  }
+  for (int t = 0; t < system.n_terms; ++t) {
+    const double c = coefficients_(n + t, column);
+    value += system.basis.value(t, z) * c;
+    for (int k = 0; k < Dim; ++k) g[k] += system.basis.derivative(t, k, z) * c;
+  }
+  const double scale = factors_->radius * scale_;
+  for (int k = 0; k < Dim; ++k) grad[k] = g[k] / scale;
+  return value;
+}
+
+template <int Dim>
 double Interpolant<Dim>::lebesgue(std::span<const Vec<Dim>> points) const {
   LIQUID_VERIFY(status().usable(), "RBF interpolant unusable: {}", status().describe());
   const int n = n_nodes();

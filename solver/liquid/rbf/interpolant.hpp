@@ -51,6 +51,9 @@ class Interpolant {
   double value_at(const Vec<Dim>& x, int column = 0) const;
   /// Gradient of every fitted field at x: row k holds d/dx_k.
   Eigen::MatrixXd gradient(const Vec<Dim>& x) const;
+  /// value_at(x, column) and that field's gradient (Dim entries written to `grad`) in one pass over
+  /// the nodes, without allocating: the same bits as the two calls (APIC's g2p, one per particle).
+  double value_and_gradient(const Vec<Dim>& x, int column, double* grad) const;
 
   /// The Lebesgue function's largest value over `points`: max over x of sum_j |w_j(x)|, with w_j
   /// the cardinal functions (the interpolant of the j-th unit vector). It bounds how much the

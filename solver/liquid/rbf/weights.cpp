@@ -1,6 +1,7 @@
 #include "liquid/rbf/weights.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <vector>
@@ -80,6 +81,120 @@ double probe_condition(const Eigen::PartialPivLU<Eigen::MatrixXd>& lu, const Eig
       std::max(image.col(0).lpNorm<1>(), 2.0 * image.col(1).lpNorm<1>() / (3.0 * static_cast<double>(n)));
   return K.cwiseAbs().colwise().sum().maxCoeff() * inverse;
 }
+
+/// The distances |z_i - z_j| for j < i, at distance[i * n + j]. False, with the status set, when a
+/// node is not finite or two nodes are closer than the coincidence tolerance.
+template <int Dim>
+bool pairwise_distances(std::span<const Vec<Dim>> z, const Config& config, Status& status,
+                        std::vector<double>& distance) {
+  const int n = static_cast<int>(z.size());
+  distance.resize(static_cast<std::size_t>(n) * n);
+  for (int i = 0; i < n; ++i) {
+    if (!z[i].allFinite()) {
+      status.info = Info::non_finite;
+      status.node_a = i;
+      return false;
+    }
+    for (int j = 0; j < i; ++j) {
+      const double d = (z[i] - z[j]).norm();
+      if (d < config.coincidence_tolerance) {
+        status.info = Info::coincident_nodes;
+        status.node_a = j;
+        status.node_b = i;
+        return false;
+      }
+      distance[static_cast<std::size_t>(i) * n + j] = d;
+    }
+  }
+  return true;
+}
+
+/// LU with partial pivoting of a small dense matrix held on the stack, for value_weights' one
+/// saddle system per face: below some 40 unknowns Eigen's blocked LU spends more in packing and
+/// kernel calls than in arithmetic (a 20 x 20 system took about twice as long). Column-major; the
+/// same pivot rule as Eigen's (the first largest magnitude in the column).
+class SmallLu {
+ public:
+  static constexpr int capacity = 48;
+
+  /// Copies the leading n x n block of `k` (column-major, leading dimension n) and factorises it.
+  void factorise(const double* k, int n) {
+    n_ = n;
+    std::copy_n(k, static_cast<std::size_t>(n) * n, a_.begin());
+    for (int c = 0; c < n; ++c) {
+      double* col = &a_[static_cast<std::size_t>(c) * n];
+      int pivot = c;
+      double largest = std::abs(col[c]);
+      for (int i = c + 1; i < n; ++i)
+        if (std::abs(col[i]) > largest) largest = std::abs(col[i]), pivot = i;
+      swap_[c] = pivot;
+      if (pivot != c)
+        for (int j = 0; j < n; ++j)
+          std::swap(a_[static_cast<std::size_t>(j) * n + c], a_[static_cast<std::size_t>(j) * n + pivot]);
+      // A zero pivot is left in place: the solves then give infinities, which the condition
+      // estimate reads as a singular system.
+      if (col[c] != 0.0) {
+        const double inverse = 1.0 / col[c];
+        for (int i = c + 1; i < n; ++i) col[i] *= inverse;
+      }
+      for (int j = c + 1; j < n; ++j) {
+        double* cj = &a_[static_cast<std::size_t>(j) * n];
+        const double f = cj[c];
+        if (f == 0.0) continue;
+        for (int i = c + 1; i < n; ++i) cj[i] -= col[i] * f;
+      }
+    }
+  }
+  /// Solves in place.
+  void solve(double* b) const {
+    const int n = n_;
+    for (int c = 0; c < n; ++c)
+      if (swap_[c] != c) std::swap(b[c], b[swap_[c]]);
+    for (int c = 0; c < n; ++c) {
+      const double* col = &a_[static_cast<std::size_t>(c) * n];
+      const double f = b[c];
+      if (f != 0.0)
+        for (int i = c + 1; i < n; ++i) b[i] -= col[i] * f;
+    }
+    for (int c = n - 1; c >= 0; --c) {
+      const double* col = &a_[static_cast<std::size_t>(c) * n];
+      b[c] /= col[c];
+      const double f = b[c];
+      for (int i = 0; i < c; ++i) b[i] -= col[i] * f;
+    }
+  }
+
+ private:
+  int n_ = 0;
+  std::array<double, static_cast<std::size_t>(capacity) * capacity> a_;
+  std::array<int, capacity> swap_;
+};
+
+/// probe_condition's estimate on a SmallLu of the matrix k (column-major, n x n).
+double small_probe_condition(const SmallLu& lu, const double* k, int n) {
+  std::array<double, SmallLu::capacity> first, second;
+  for (int i = 0; i < n; ++i) {
+    first[i] = 1.0 / static_cast<double>(n);
+    const double ramp = n > 1 ? static_cast<double>(i) / static_cast<double>(n - 1) : 0.0;
+    second[i] = (i % 2 == 0 ? 1.0 : -1.0) * (1.0 + ramp);
+  }
+  lu.solve(first.data());
+  lu.solve(second.data());
+  double s1 = 0.0, s2 = 0.0;
+  for (int i = 0; i < n; ++i) {
+    if (!std::isfinite(first[i]) || !std::isfinite(second[i])) return std::numeric_limits<double>::infinity();
+    s1 += std::abs(first[i]);
+    s2 += std::abs(second[i]);
+  }
+  const double inverse = std::max(s1, 2.0 * s2 / (3.0 * static_cast<double>(n)));
+  double norm = 0.0;
+  for (int c = 0; c < n; ++c) {
+    double sum = 0.0;
+    for (int i = 0; i < n; ++i) sum += std::abs(k[static_cast<std::size_t>(c) * n + i]);
+    norm = std::max(norm, sum);
+  }
+  return norm * inverse;
+}
 }  // namespace
 
 template <int Dim>
@@ -94,24 +209,7 @@ SaddleSystem<Dim>::SaddleSystem(std::span<const Vec<Dim>> z, const Config& confi
   }
   // The pairwise distances, once: for the coincidence test and then the kernel block.
   thread_local std::vector<double> distance;
-  distance.resize(static_cast<std::size_t>(n_nodes) * n_nodes);
-  for (int i = 0; i < n_nodes; ++i) {
-    if (!z[i].allFinite()) {
-      status.info = Info::non_finite;
-      status.node_a = i;
-      return;
-    }
-    for (int j = 0; j < i; ++j) {
-      const double d = (z[i] - z[j]).norm();
-      if (d < config.coincidence_tolerance) {
-        status.info = Info::coincident_nodes;
-        status.node_a = j;
-        status.node_b = i;
-        return;
-      }
-      distance[static_cast<std::size_t>(i) * n_nodes + j] = d;
-    }
-  }
+  if (!pairwise_distances<Dim>(z, config, status, distance)) return;
   Eigen::MatrixXd P;
   const int degree = carried_degree<Dim>(z, config.degree, config.rank_tolerance, P);
   status.degree_used = degree;
@@ -139,6 +237,70 @@ SaddleSystem<Dim>::SaddleSystem(std::span<const Vec<Dim>> z, const Config& confi
     return;
   }
   status.info = degree < config.degree ? Info::degree_reduced : Info::ok;
+}
+
+/// value_weights on nodes already in the unit ball, for systems of at most SmallLu::capacity
+/// unknowns: the saddle system of SaddleSystem (the same degree rule, condition test and one step of
+/// iterative refinement) factorised by SmallLu. `status` comes in with the node count and the
+/// requested degree.
+template <int Dim>
+Status small_value_weights(std::span<const Vec<Dim>> z, const Config& config, Status status,
+                           std::vector<double>& out) {
+  const int n = static_cast<int>(z.size());
+  thread_local std::vector<double> distance;
+  if (!pairwise_distances<Dim>(z, config, status, distance)) return status;
+  thread_local Eigen::MatrixXd P;
+  const int degree = carried_degree<Dim>(z, config.degree, config.rank_tolerance, P);
+  status.degree_used = degree;
+  const PolynomialBasis<Dim> basis(degree);
+  const Phs kernel(config.exponent);
+  const int n_terms = basis.size();
+  const int size = n + n_terms;
+  thread_local std::array<double, static_cast<std::size_t>(SmallLu::capacity) * SmallLu::capacity> k;
+  const auto at = [&](int i, int j) -> double& { return k[static_cast<std::size_t>(j) * size + i]; };
+  std::fill_n(k.begin(), static_cast<std::size_t>(size) * size, 0.0);
+  for (int i = 0; i < n; ++i) {
+    for (int j = 0; j < i; ++j)
+      at(i, j) = at(j, i) = kernel.value(distance[static_cast<std::size_t>(i) * n + j]);
+    for (int t = 0; t < n_terms; ++t) at(i, n + t) = at(n + t, i) = P(i, t);
+  }
+  thread_local SmallLu lu;
+  lu.factorise(k.data(), size);
+  if (config.condition_estimate == ConditionEstimate::probes) {
+    status.condition = small_probe_condition(lu, k.data(), size);
+  } else {
+    // Only the estimate comes from Eigen's LU, so that the weights do not depend on the estimate.
+    const Eigen::Map<const Eigen::MatrixXd> matrix(k.data(), size, size);
+    const double rcond = Eigen::PartialPivLU<Eigen::MatrixXd>(matrix).rcond();
+    status.condition = rcond > 0.0 ? 1.0 / rcond : std::numeric_limits<double>::infinity();
+  }
+  if (!(status.condition <= config.max_condition)) {
+    status.info = Info::singular_system;
+    return status;
+  }
+  status.info = degree < config.degree ? Info::degree_reduced : Info::ok;
+  // One right-hand side: phi(|z_j|) and the basis at the evaluation point (the origin), then one
+  // step of iterative refinement against the matrix itself.
+  std::array<double, SmallLu::capacity> rhs, x, r;
+  for (int j = 0; j < n; ++j) rhs[j] = kernel.value(z[j].norm());
+  const Vec<Dim> origin = Vec<Dim>::Zero();
+  for (int t = 0; t < n_terms; ++t) rhs[n + t] = basis.value(t, origin);
+  std::copy_n(rhs.begin(), size, x.begin());
+  lu.solve(x.data());
+  std::copy_n(rhs.begin(), size, r.begin());
+  for (int j = 0; j < size; ++j) {
+    const double xj = x[j];
+    for (int i = 0; i < size; ++i) r[i] -= at(i, j) * xj;
+  }
+  lu.solve(r.data());
+  for (int i = 0; i < size; ++i) x[i] += r[i];
+  for (int j = 0; j < n; ++j)
+    if (!std::isfinite(x[j])) {
+      status.info = Info::non_finite;
+      return status;
+    }
+  out.assign(x.begin(), x.begin() + n);
+  return status;
 }
 
 template struct SaddleSystem<2>;
@@ -251,6 +413,8 @@ Status value_weights(std::span<const Vec<Dim>> nodes, const Vec<Dim>& at, const 
   thread_local std::vector<Vec<Dim>> z;
   z.resize(n);
   for (int j = 0; j < n; ++j) z[j] = (nodes[j] - at) / radius;
+  if (n + n_polynomial_terms(Dim, std::min(std::max(config.degree, 0), 4)) <= detail::SmallLu::capacity)
+    return detail::small_value_weights<Dim>(z, config, status, out);
   detail::SaddleSystem<Dim> system(z, config);
   status = system.status;
   if (!status.usable()) return status;

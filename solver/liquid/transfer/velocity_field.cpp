@@ -157,12 +157,15 @@ Vec<Dim> FaceVelocityField<Dim>::with_gradient(const Vec<Dim>& x, double* grad) 
       v[k] = 0.0;
       continue;
     }
-    const double raw = ci->interp[k] ? ci->interp[k]->value_at(y) : ci->fallback[k];
+    if (!ci->interp[k]) {
+      v[k] = options_.clamp ? std::clamp(ci->fallback[k], ci->lo[k], ci->hi[k]) : ci->fallback[k];
+      continue;
+    }
+    const double raw = ci->interp[k]->value_and_gradient(y, 0, grad + k * Dim);
     const double value = options_.clamp ? std::clamp(raw, ci->lo[k], ci->hi[k]) : raw;
     v[k] = value;
-    if (!ci->interp[k] || value != raw) continue;
-    const Eigen::MatrixXd g = ci->interp[k]->gradient(y);
-    for (int j = 0; j < Dim; ++j) grad[k * Dim + j] = g(j, 0);
+    // A clamped value keeps no gradient.
+    if (value != raw) std::fill_n(grad + k * Dim, Dim, 0.0);
   }
   return v;
 }

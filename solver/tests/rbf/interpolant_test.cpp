@@ -1,6 +1,7 @@
-// The RBF interpolant: interpolation at the nodes, polynomial reproduction, gradients; the cache of
-// shared factors: equal to a direct interpolant to round-off whatever the node order, one entry per
-// layout at any level and place, an entry that depends on its key alone, bypassed off the quantum.
+// The RBF interpolant: interpolation at the nodes, polynomial reproduction, gradients (also in one
+// pass with the value); the cache of shared factors: equal to a direct interpolant to round-off
+// whatever the node order, one entry per layout at any level and place, an entry that depends on its
+// key alone, bypassed off the quantum.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -37,6 +38,21 @@ TEST(RbfInterpolant, InterpolatesAtNodesAndReproducesQuadratics3D) {
   EXPECT_NEAR(g(0, 0), 2 + x[0], 1e-9);
   EXPECT_NEAR(g(1, 0), -x[2], 1e-9);
   EXPECT_NEAR(g(2, 0), -x[1], 1e-9);
+  // The one-pass value and gradient are the two calls' bits, for either field (r^3 and r^5).
+  for (int exponent : {3, 5}) {
+    Interpolant<3> other(nodes, Config{exponent, exponent == 3 ? 1 : 2});
+    ASSERT_TRUE(other.status().usable());
+    other.fit(values);
+    for (int column : {0, 1}) {
+      double grad[3];
+      const double value = other.value_and_gradient(x, column, grad);
+      EXPECT_EQ(value, other.value_at(x, column));
+      const Eigen::MatrixXd expected = other.gradient(x);
+      for (int k = 0; k < 3; ++k) EXPECT_EQ(grad[k], expected(k, column)) << "axis " << k;
+    }
+    double grad[3];
+    EXPECT_THROW(other.value_and_gradient(x, 2, grad), Error);
+  }
 }
 
 TEST(RbfInterpolant, ErrorsAreExplicit) {

@@ -250,6 +250,18 @@ TEST(RbfFdWeights, ValueWeightsEqualTheIdentityColumn) {
     ASSERT_EQ(a.size(), b.size());
     for (std::size_t j = 0; j < a.size(); ++j) EXPECT_NEAR(a[j], b[j], 1e-12);
   }
+  // Up to 48 unknowns (the rows above: 28 to 47) value_weights factorises on the stack; past them
+  // (125 nodes) it takes the saddle system's LU. Both are the identity column.
+  {
+    const auto nodes = support::jittered_stencil<3>(2, 0.3, 0.25, 17u);
+    const Vec<3> at(0.11, -0.07, 0.2);
+    std::vector<double> a, b;
+    const Config config{3, 1};
+    ASSERT_TRUE(weights<3>(nodes, at, Operator<3>::identity(), config, a).usable());
+    ASSERT_TRUE(value_weights<3>(nodes, at, config, b).usable());
+    ASSERT_EQ(a.size(), b.size());
+    for (std::size_t j = 0; j < a.size(); ++j) EXPECT_NEAR(a[j], b[j], 1e-12);
+  }
   std::vector<double> w;
   EXPECT_EQ(value_weights<2>({}, Vec<2>::Zero(), Config{5, 2}, w).info, Info::empty_stencil);
   EXPECT_TRUE(w.empty());
