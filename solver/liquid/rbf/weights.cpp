@@ -66,8 +66,10 @@ int carried_degree(std::span<const Vec<Dim>> z, int requested, double tolerance,
 /// ||K||_1 times a lower bound of ||K^-1||_1 from two fixed probes: K^-1 applied to the constant
 /// vector 1/n (the start of Hager's ascent) and to Higham's alternating vector
 /// (-1)^i (1 + i / (n - 1)), whose image bounds ||K^-1||_1 from below after the factor 2 / (3n).
-/// A zero pivot gives an infinite or NaN image: an infinite condition.
-double probe_condition(const Eigen::PartialPivLU<Eigen::MatrixXd>& lu, const Eigen::MatrixXd& K) {
+/// A zero pivot gives an infinite or NaN image: an infinite condition. `solve(probe)` applies K^-1
+/// to the n x 2 probe in place (Eigen's LU or SmallLu).
+template <class Matrix, class Solve>
+double probe_condition(const Matrix& K, Solve&& solve) {
   const Eigen::Index n = K.rows();
   Eigen::Matrix<double, Eigen::Dynamic, 2> probe(n, 2);
   for (Eigen::Index i = 0; i < n; ++i) {
@@ -75,11 +77,31 @@ double probe_condition(const Eigen::PartialPivLU<Eigen::MatrixXd>& lu, const Eig
     const double ramp = n > 1 ? static_cast<double>(i) / static_cast<double>(n - 1) : 0.0;
     probe(i, 1) = (i % 2 == 0 ? 1.0 : -1.0) * (1.0 + ramp);
   }
-  const Eigen::Matrix<double, Eigen::Dynamic, 2> image = lu.solve(probe);
-  if (!image.allFinite()) return std::numeric_limits<double>::infinity();
+  solve(probe);
+  if (!probe.allFinite()) return std::numeric_limits<double>::infinity();
   const double inverse =
-      std::max(image.col(0).lpNorm<1>(), 2.0 * image.col(1).lpNorm<1>() / (3.0 * static_cast<double>(n)));
+      std::max(probe.col(0).lpNorm<1>(), 2.0 * probe.col(1).lpNorm<1>() / (3.0 * static_cast<double>(n)));
   return K.cwiseAbs().colwise().sum().maxCoeff() * inverse;
+}
+
+/// The saddle matrix [A P; P^T 0] into K (size n + n_terms, zeroed by the caller), with A_ij the
+/// kernel at distance[i * n + j] (j < i; 0 on the diagonal) and P the first n_terms columns of `P`.
+template <class Matrix>
+void fill_saddle(Matrix& K, const std::vector<double>& distance, const Eigen::MatrixXd& P, int n, int n_terms,
+                 const Phs& kernel) {
+  for (int i = 0; i < n; ++i) {
+    for (int j = 0; j < i; ++j)
+      K(i, j) = K(j, i) = kernel.value(distance[static_cast<std::size_t>(i) * n + j]);
+    for (int t = 0; t < n_terms; ++t) K(i, n + t) = K(n + t, i) = P(i, t);
+  }
+}
+
+/// Sets status.info from the condition estimate and the degree carried.
+void judge(Status& status, int degree, const Config& config) {
+  if (!(status.condition <= config.max_condition))
+    status.info = Info::singular_system;
+  else
+    status.info = degree < config.degree ? Info::degree_reduced : Info::ok;
 }
 
 /// The distances |z_i - z_j| for j < i, at distance[i * n + j]. False, with the status set, when a
@@ -170,31 +192,6 @@ class SmallLu {
   std::array<int, capacity> swap_;
 };
 
-/// probe_condition's estimate on a SmallLu of the matrix k (column-major, n x n).
-double small_probe_condition(const SmallLu& lu, const double* k, int n) {
-  std::array<double, SmallLu::capacity> first, second;
-  for (int i = 0; i < n; ++i) {
-    first[i] = 1.0 / static_cast<double>(n);
-    const double ramp = n > 1 ? static_cast<double>(i) / static_cast<double>(n - 1) : 0.0;
-    second[i] = (i % 2 == 0 ? 1.0 : -1.0) * (1.0 + ramp);
-  }
-  lu.solve(first.data());
-  lu.solve(second.data());
-  double s1 = 0.0, s2 = 0.0;
-  for (int i = 0; i < n; ++i) {
-    if (!std::isfinite(first[i]) || !std::isfinite(second[i])) return std::numeric_limits<double>::infinity();
-    s1 += std::abs(first[i]);
-    s2 += std::abs(second[i]);
-  }
-  const double inverse = std::max(s1, 2.0 * s2 / (3.0 * static_cast<double>(n)));
-  double norm = 0.0;
-  for (int c = 0; c < n; ++c) {
-    double sum = 0.0;
-    for (int i = 0; i < n; ++i) sum += std::abs(k[static_cast<std::size_t>(c) * n + i]);
-    norm = std::max(norm, sum);
-  }
-  return norm * inverse;
-}
 }  // namespace
 
 template <int Dim>
@@ -218,25 +215,17 @@ SaddleSystem<Dim>::SaddleSystem(std::span<const Vec<Dim>> z, const Config& confi
 
   const int size = n_nodes + n_terms;
   Eigen::MatrixXd K = Eigen::MatrixXd::Zero(size, size);
-  for (int i = 0; i < n_nodes; ++i) {
-    for (int j = 0; j < i; ++j)
-      K(i, j) = K(j, i) = kernel.value(distance[static_cast<std::size_t>(i) * n_nodes + j]);
-    for (int t = 0; t < n_terms; ++t) K(i, n_nodes + t) = K(n_nodes + t, i) = P(i, t);
-  }
+  fill_saddle(K, distance, P, n_nodes, n_terms, kernel);
   lu.compute(K);
   matrix = std::move(K);
   if (config.condition_estimate == ConditionEstimate::probes) {
-    status.condition = probe_condition(lu, matrix);
+    status.condition = probe_condition(matrix, [&](auto& probe) { probe = lu.solve(probe).eval(); });
   } else {
     // A singular K (a zero pivot) makes the estimate 0 or NaN; both read as an infinite condition.
     const double rcond = lu.rcond();
     status.condition = rcond > 0.0 ? 1.0 / rcond : std::numeric_limits<double>::infinity();
   }
-  if (!(status.condition <= config.max_condition)) {
-    status.info = Info::singular_system;
-    return;
-  }
-  status.info = degree < config.degree ? Info::degree_reduced : Info::ok;
+  judge(status, degree, config);
 }
 
 /// value_weights on nodes already in the unit ball, for systems of at most SmallLu::capacity
@@ -257,28 +246,23 @@ Status small_value_weights(std::span<const Vec<Dim>> z, const Config& config, St
   const int n_terms = basis.size();
   const int size = n + n_terms;
   thread_local std::array<double, static_cast<std::size_t>(SmallLu::capacity) * SmallLu::capacity> k;
-  const auto at = [&](int i, int j) -> double& { return k[static_cast<std::size_t>(j) * size + i]; };
-  std::fill_n(k.begin(), static_cast<std::size_t>(size) * size, 0.0);
-  for (int i = 0; i < n; ++i) {
-    for (int j = 0; j < i; ++j)
-      at(i, j) = at(j, i) = kernel.value(distance[static_cast<std::size_t>(i) * n + j]);
-    for (int t = 0; t < n_terms; ++t) at(i, n + t) = at(n + t, i) = P(i, t);
-  }
+  Eigen::Map<Eigen::MatrixXd> K(k.data(), size, size);
+  K.setZero();
+  fill_saddle(K, distance, P, n, n_terms, kernel);
   thread_local SmallLu lu;
   lu.factorise(k.data(), size);
   if (config.condition_estimate == ConditionEstimate::probes) {
-    status.condition = small_probe_condition(lu, k.data(), size);
+    status.condition = probe_condition(K, [&](auto& probe) {
+      lu.solve(probe.col(0).data());
+      lu.solve(probe.col(1).data());
+    });
   } else {
     // Only the estimate comes from Eigen's LU, so that the weights do not depend on the estimate.
-    const Eigen::Map<const Eigen::MatrixXd> matrix(k.data(), size, size);
-    const double rcond = Eigen::PartialPivLU<Eigen::MatrixXd>(matrix).rcond();
+    const double rcond = Eigen::PartialPivLU<Eigen::MatrixXd>(K).rcond();
     status.condition = rcond > 0.0 ? 1.0 / rcond : std::numeric_limits<double>::infinity();
   }
-  if (!(status.condition <= config.max_condition)) {
-    status.info = Info::singular_system;
-    return status;
-  }
-  status.info = degree < config.degree ? Info::degree_reduced : Info::ok;
+  judge(status, degree, config);
+  if (status.info == Info::singular_system) return status;
   // One right-hand side: phi(|z_j|) and the basis at the evaluation point (the origin), then one
   // step of iterative refinement against the matrix itself.
   std::array<double, SmallLu::capacity> rhs, x, r;
@@ -290,7 +274,7 @@ Status small_value_weights(std::span<const Vec<Dim>> z, const Config& config, St
   std::copy_n(rhs.begin(), size, r.begin());
   for (int j = 0; j < size; ++j) {
     const double xj = x[j];
-    for (int i = 0; i < size; ++i) r[i] -= at(i, j) * xj;
+    for (int i = 0; i < size; ++i) r[i] -= K(i, j) * xj;
   }
   lu.solve(r.data());
   for (int i = 0; i < size; ++i) x[i] += r[i];
