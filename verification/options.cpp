@@ -160,6 +160,10 @@ void add_study_flags(CLI::App& app, StudyFlags& f) {
       ->check(CLI::ExistingDirectory);
   app.add_option("--methods", f.methods, "flow studies: run only these methods (comma-separated row names)")
       ->delimiter(',');
+  app.add_option(
+      "--reference-method", f.reference,
+      "dam-break-convergence: the method of the reference run, one level finer than the finest row "
+      "(default: regular-apic; adaptive-rbf in 3D past level 7)");
   app.add_option("--seed", f.seed,
                  "sampled problems (the SPH resampling and surface cases): the random draws");
   app.add_option("--particles", f.particles,
@@ -197,13 +201,13 @@ void add_study_flags(CLI::App& app, StudyFlags& f) {
 
 CaseOptions case_options(const StudyFlags& f, const CaseInfo& info) {
   std::vector<std::string> refused;
-  for (Option o :
-       {Option::levels,       Option::max_jump,   Option::solver,          Option::stencil,
-        Option::rbf_exponent, Option::rbf_degree, Option::gradient_degree, Option::stencil_growth,
-        Option::ring_cap,     Option::rows,       Option::nullspace,       Option::tolerance,
-        Option::algebraic,    Option::perturb,    Option::trees,           Option::methods,
-        Option::seed,         Option::particles,  Option::radius,          Option::aspect,
-        Option::merge_wait,   Option::duration,   Option::sizes,           Option::resample_travel})
+  for (Option o : {Option::levels,       Option::max_jump,   Option::solver,          Option::stencil,
+                   Option::rbf_exponent, Option::rbf_degree, Option::gradient_degree, Option::stencil_growth,
+                   Option::ring_cap,     Option::rows,       Option::nullspace,       Option::tolerance,
+                   Option::algebraic,    Option::perturb,    Option::trees,           Option::methods,
+                   Option::seed,         Option::particles,  Option::radius,          Option::aspect,
+                   Option::merge_wait,   Option::duration,   Option::sizes,           Option::resample_travel,
+                   Option::reference})
     if (f.given(o) && !info.accepts_option(o)) refused.push_back(flag_of(o));
   if (!refused.empty()) {
     std::vector<std::string> accepted;
@@ -243,6 +247,7 @@ CaseOptions case_options(const StudyFlags& f, const CaseInfo& info) {
     if (f.methods.empty()) throw Error("--methods: give at least one method");
     o.methods = f.methods;
   }
+  if (f.given(Option::reference)) o.reference = f.reference;
   if (f.given(Option::seed)) {
     // Digits only, within 64 bits (a parser for unsigned integers would wrap -3 or saturate 1e23).
     std::uint64_t seed = 0;
@@ -286,6 +291,7 @@ std::string echo(const std::string& case_name, const StudyFlags& f) {
   s += show(Option::perturb, name_of(perturb_names, f.perturb));
   s += show(Option::trees, f.trees_dir);
   s += show(Option::methods, fmt::format("{}", fmt::join(f.methods, ",")));
+  s += show(Option::reference, f.reference);
   s += show(Option::seed, f.seed);
   s += show(Option::particles, std::to_string(f.particles));
   s += show(Option::radius, fmt::format("{:g}", f.radius));

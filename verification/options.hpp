@@ -29,6 +29,7 @@ struct StudyFlags {
   Perturbation perturb = Perturbation::first_order;
   std::string trees_dir;
   std::vector<std::string> methods;
+  std::string reference;
   std::string seed;
   long particles = 0;
   double radius = 0.0, aspect = 1.0;

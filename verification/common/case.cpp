@@ -57,6 +57,8 @@ const char* flag_of(Option option) {
       return "--duration";
     case Option::sizes:
       return "--sizes";
+    case Option::reference:
+      return "--reference-method";
     case Option::resample_travel:
       return "--resample-travel";
   }

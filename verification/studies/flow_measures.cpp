@@ -15,8 +15,8 @@
 
 namespace liquid::verification {
 
-std::vector<FlowMethod> chosen_methods(std::span<const FlowMethod> all,
-                                       const std::vector<std::string>& names) {
+std::vector<FlowMethod> chosen_methods(std::span<const FlowMethod> all, const std::vector<std::string>& names,
+                                       const char* flag) {
   if (names.empty()) return {all.begin(), all.end()};
   std::vector<FlowMethod> out;
   std::vector<std::string> known;
@@ -24,7 +24,7 @@ std::vector<FlowMethod> chosen_methods(std::span<const FlowMethod> all,
   for (const std::string& name : names) {
     const auto it = std::find(known.begin(), known.end(), name);
     if (it == known.end())
-      throw Error(fmt::format("--methods: '{}' is not a method of this case (its methods: {})", name,
+      throw Error(fmt::format("{}: '{}' is not a method of this case (its methods: {})", flag, name,
                               fmt::join(known, ", ")));
     out.push_back(all[static_cast<std::size_t>(it - known.begin())]);
   }
@@ -97,25 +97,48 @@ template double affine_energy<3>(const pic::AdaptivePic<3>&, std::span<const dou
 template double twice_kinetic_energy<2>(const pic::AdaptivePic<2>&, double);
 template double twice_kinetic_energy<3>(const pic::AdaptivePic<3>&, double);
 
-double seconds_at_error(const std::vector<double>& errors, const std::vector<double>& seconds, double target,
-                        Reach& how) {
-  std::vector<std::pair<double, double>> pts;  // (log error, log seconds)
+namespace {
+
+/// A method's runs as (log error, log seconds), by error; runs without a positive error and time left out.
+std::vector<std::pair<double, double>> log_points(const std::vector<double>& errors,
+                                                  const std::vector<double>& seconds) {
+  std::vector<std::pair<double, double>> pts;
   for (std::size_t i = 0; i < errors.size() && i < seconds.size(); ++i)
     if (errors[i] > 0.0 && seconds[i] > 0.0) pts.emplace_back(std::log(errors[i]), std::log(seconds[i]));
   std::sort(pts.begin(), pts.end());
-  const double x = std::log(target);
-  how = Reach::interpolated;
-  if (!pts.empty() && x >= pts.back().first) {
-    double best = std::numeric_limits<double>::infinity();
-    for (const auto& p : pts) best = std::min(best, p.second);
-    how = Reach::at_most;
-    return std::exp(best);
-  }
+  return pts;
+}
+
+/// Log seconds at log error x between the two points that bracket it; NaN when none do.
+double between(const std::vector<std::pair<double, double>>& pts, double x) {
   for (std::size_t i = 0; i + 1 < pts.size(); ++i)
     if (pts[i].first <= x && x <= pts[i + 1].first && pts[i + 1].first > pts[i].first) {
       const double f = (x - pts[i].first) / (pts[i + 1].first - pts[i].first);
-      return std::exp(pts[i].second + f * (pts[i + 1].second - pts[i].second));
+      return pts[i].second + f * (pts[i + 1].second - pts[i].second);
     }
+  for (const auto& p : pts)  // a single run, or runs of equal error
+    if (p.first == x) return p.second;
+  return NAN;
+}
+
+double cheapest(const std::vector<std::pair<double, double>>& pts) {
+  double best = std::numeric_limits<double>::infinity();
+  for (const auto& p : pts) best = std::min(best, p.second);
+  return std::exp(best);
+}
+
+}  // namespace
+
+double seconds_at_error(const std::vector<double>& errors, const std::vector<double>& seconds, double target,
+                        Reach& how) {
+  const auto pts = log_points(errors, seconds);
+  const double x = std::log(target);
+  how = Reach::interpolated;
+  if (!pts.empty() && x >= pts.back().first) {
+    how = Reach::at_most;
+    return cheapest(pts);
+  }
+  if (const double y = between(pts, x); std::isfinite(y)) return std::exp(y);
   how = Reach::extrapolated;
   if (pts.size() < 2) return pts.empty() ? NAN : std::exp(pts[0].second);
   // The power law through the points' mean with fit_order's least-squares slope (log base is moot).
@@ -127,6 +150,92 @@ double seconds_at_error(const std::vector<double>& errors, const std::vector<dou
   }
   const double slope = fit_order(e, t);
   return std::exp(my + (std::isfinite(slope) ? slope : 0.0) * (x - mx));
+}
+
+SecondsAt seconds_at(const ErrorCurve& curve, double error) {
+  const auto pts = log_points(curve.errors, curve.seconds);
+  LIQUID_VERIFY(!pts.empty() && error > 0.0, "{}: no run with a positive error and time to read {:g} from",
+                curve.name, error);
+  const double x = std::log(error);
+  if (x < pts.front().first) {
+    // More accurate than any run: at least what the most accurate run took.
+    return {std::exp(pts.front().second), SecondsAt::Kind::at_least};
+  }
+  if (x > pts.back().first) return {cheapest(pts), SecondsAt::Kind::at_most};
+  return {std::exp(between(pts, x)), SecondsAt::Kind::value};
+}
+
+std::vector<EqualErrorRow> speed_at_equal_error(const ErrorCurve& method,
+                                                std::span<const ErrorCurve> others) {
+  std::vector<EqualErrorRow> rows;
+  const auto own = log_points(method.errors, method.seconds);
+  if (own.size() < 2 || others.empty()) return rows;
+  // The range from the errors themselves (exp of their logs may round off the ends).
+  double lo = std::numeric_limits<double>::infinity(), hi = 0.0;
+  for (std::size_t i = 0; i < method.errors.size() && i < method.seconds.size(); ++i)
+    if (method.errors[i] > 0.0 && method.seconds[i] > 0.0)
+      lo = std::min(lo, method.errors[i]), hi = std::max(hi, method.errors[i]);
+  std::vector<double> at;
+  const auto take = [&](const ErrorCurve& c) {
+    for (std::size_t i = 0; i < c.errors.size() && i < c.seconds.size(); ++i)
+      if (c.errors[i] >= lo && c.errors[i] <= hi && c.seconds[i] > 0.0) at.push_back(c.errors[i]);
+  };
+  take(method);
+  for (const ErrorCurve& c : others) take(c);
+  std::sort(at.rbegin(), at.rend());
+  at.erase(std::unique(at.begin(), at.end()), at.end());
+  const double inf = std::numeric_limits<double>::infinity();
+  for (double e : at) {
+    EqualErrorRow row;
+    row.error = e;
+    row.seconds = seconds_at(method, e).seconds;
+    // The fastest other's time T = min over the others: bounded below by each one's value or lower
+    // bound (an upper bound says nothing below), above by each one's value or upper bound.
+    // The method named is the one setting the upper bound where there is one, else the lower one.
+    double below = inf, above = inf;
+    const ErrorCurve *by_below = nullptr, *by_above = nullptr;
+    SecondsAt s_below, s_above;
+    for (const ErrorCurve& c : others) {
+      const SecondsAt s = seconds_at(c, e);
+      const double b = s.kind == SecondsAt::Kind::at_most ? 0.0 : s.seconds;
+      const double a = s.kind == SecondsAt::Kind::at_least ? inf : s.seconds;
+      if (by_below == nullptr || b < below) below = b, by_below = &c, s_below = s;
+      if (a < above) above = a, by_above = &c, s_above = s;
+    }
+    row.fastest = by_above != nullptr ? by_above->name : by_below->name;
+    row.other = by_above != nullptr ? s_above : s_below;
+    row.low = below / row.seconds;
+    row.high = above / row.seconds;
+    rows.push_back(row);
+  }
+  return rows;
+}
+
+std::string speedup_text(const EqualErrorRow& row) {
+  const auto x = [](double v) { return fmt::format("{:.2g}x", v); };
+  if (row.low == row.high) return x(row.low);
+  if (!std::isfinite(row.high)) return ">= " + x(row.low);
+  if (row.low <= 0.0) return "<= " + x(row.high);
+  return x(row.low) + " to " + x(row.high);
+}
+
+Table equal_error_table(const std::vector<EqualErrorRow>& rows, const std::string& title,
+                        const std::string& error, const std::string& method) {
+  Table t(title, {error, method + " seconds", "fastest other", "its seconds", "read as", "speed-up"});
+  for (const EqualErrorRow& row : rows) {
+    const char* how = row.other.kind == SecondsAt::Kind::value      ? "between its rows"
+                      : row.other.kind == SecondsAt::Kind::at_least ? "at least: its most accurate row"
+                                                                    : "at most: its cheapest row";
+    t.add_row({row.error, row.seconds, row.fastest, row.other.seconds, std::string(how), speedup_text(row)});
+  }
+  return t;
+}
+
+std::string equal_error_summary(const std::vector<EqualErrorRow>& rows) {
+  std::string s;
+  for (const EqualErrorRow& row : rows)
+    s += fmt::format("{}{} at {:.2g}", s.empty() ? "" : ", ", speedup_text(row), row.error);
+  return s;
 }
 
 }  // namespace liquid::verification

@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "common/table.hpp"
 #include "liquid/pic/adaptive_pic.hpp"
 #include "liquid/tree/cell_graph.hpp"
 
@@ -26,10 +27,10 @@ struct FlowMethod {
   /// A comparison row: a setting other than the default adaptive one or the paper's preset.
   bool variant() const { return everywhere || tent || ppe_degree > 0 || flux_rows || tent_share >= 0.0; }
 };
-/// The methods of `all` that --methods names, in the order named (every one when none is named);
-/// throws naming a method that is not one of them.
-std::vector<FlowMethod> chosen_methods(std::span<const FlowMethod> all,
-                                       const std::vector<std::string>& names);
+/// The methods of `all` that `flag` (--methods, or --reference-method) names, in the order named (every one
+/// when none is named); throws naming a method that is not one of them.
+std::vector<FlowMethod> chosen_methods(std::span<const FlowMethod> all, const std::vector<std::string>& names,
+                                       const char* flag = "--methods");
 /// The flow studies' methods, side by side: adaptive RBF with the default transfer and reseeding,
 /// the same with the paper's preset, RBF on the uniform tree, and the regular baselines PIC, FLIP and
 /// APIC.
@@ -95,5 +96,48 @@ enum class Reach { run, interpolated, at_most, extrapolated };
 /// accurate run does not reach it, the least-squares power law over all runs (`extrapolated`).
 double seconds_at_error(const std::vector<double>& errors, const std::vector<double>& seconds, double target,
                         Reach& how);
+
+/// A method's runs as (error, seconds) pairs, one per row of a study.
+struct ErrorCurve {
+  std::string name;
+  std::vector<double> errors, seconds;
+};
+
+/// The seconds a method needs at an error, read from its runs without extrapolating: inside the range
+/// of its runs' errors, log-log interpolation between the two runs that bracket it (exact at a run);
+/// below it, at least what its most accurate run took (a more accurate run of the same method is taken
+/// to cost more); above it, at most its cheapest run (already more accurate).
+struct SecondsAt {
+  enum class Kind { value, at_least, at_most };
+  double seconds = 0.0;
+  Kind kind = Kind::value;
+};
+SecondsAt seconds_at(const ErrorCurve& curve, double error);
+
+/// One error at which a method is compared with the fastest of the others.
+struct EqualErrorRow {
+  double error = 0.0;    ///< a run's error (any method's), inside the method's own range
+  double seconds = 0.0;  ///< the method's seconds there (interpolated between its runs)
+  std::string fastest;   ///< the other method that sets the fastest time (its bound when not read)
+  SecondsAt other;       ///< that method's seconds there
+  double low = 0.0;      ///< the speed-up (fastest other / method) is at least this (0: no bound)
+  double high = 0.0;     ///< and at most this (infinite: no bound); low == high when read exactly
+};
+
+/// Speed at equal error over the whole range where it can be read: at every run's error (any method's)
+/// inside the range of `method`'s errors, the method's seconds against the fastest of `others`. The
+/// others' bounds (SecondsAt) carry into the speed-up's, so an error no other method's runs bracket
+/// still gives a one-sided figure. Rows from the largest error to the smallest; none when `method` has
+/// fewer than two runs with a positive error and time.
+std::vector<EqualErrorRow> speed_at_equal_error(const ErrorCurve& method, std::span<const ErrorCurve> others);
+
+/// "3.1x", ">= 1.2x", "<= 0.8x" or "1.2x to 4.0x": a speed-up's bounds as text.
+std::string speedup_text(const EqualErrorRow& row);
+
+/// The rows as a report table (`error` names the error's column) and as one line for a note:
+/// "1x at 0.015, 3.1x at 0.011, >= 1.2x at 0.007".
+Table equal_error_table(const std::vector<EqualErrorRow>& rows, const std::string& title,
+                        const std::string& error, const std::string& method);
+std::string equal_error_summary(const std::vector<EqualErrorRow>& rows);
 
 }  // namespace liquid::verification

@@ -33,7 +33,8 @@
 // docs/findings/flow-studies.md). How often the projection raised the face
 // velocities' kinetic energy is counted: on the uniform tree (D G, an orthogonal projection) it must not
 // (asserted, to 1e-6 relative: the PPE's tolerance). Gated: energy and enstrophy retained and the velocity
-// error at 4T, per method and level.
+// error at 4T, per method and level. Reported: speed at equal error, at the adaptive finest row's error
+// and over the range of the adaptive rows' errors (studies/flow_measures: speed_at_equal_error).
 
 #include <algorithm>
 #include <cmath>
@@ -437,6 +438,29 @@ CaseResult run(const CaseOptions& options) {
   result.tables.push_back(std::move(zones));
   result.tables.push_back(std::move(orders));
   result.tables.push_back(std::move(equal));
+  // And over the whole range of the adaptive rows' errors, against the fastest regular baseline there.
+  {
+    const auto curve = [&](const Method& m) {
+      ErrorCurve c{m.name, {}, {}};
+      for (const Run& r : runs[m.name]) c.errors.push_back(r.at[2].error), c.seconds.push_back(r.seconds());
+      return c;
+    };
+    std::vector<ErrorCurve> regular;
+    for (const Method& m : methods())
+      if (!m.adaptive) regular.push_back(curve(m));
+    const std::vector<EqualErrorRow> rows = speed_at_equal_error(curve(methods().front()), regular);
+    if (!rows.empty()) {
+      result.tables.push_back(equal_error_table(
+          rows,
+          "speed at equal error over the adaptive RBF rows' range: at each row's L-inf error at 4T, the "
+          "adaptive run's seconds (log-log between its rows) against the fastest regular baseline's",
+          "L-inf error at 4T", "adaptive RBF"));
+      result.notes.push_back(
+          "speed at equal error over the adaptive rows' range, against the fastest regular baseline (largest "
+          "error first): " +
+          equal_error_summary(rows));
+    }
+  }
   return result;
 }
 
