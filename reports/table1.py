@@ -275,7 +275,7 @@ def gate(rows, path, bless):
                 "[tolerance]", "time_rel = 0.3", "share_rel = 0.05"]
         for (scene, level), r in rows.items():
             if not r["same_window"]:
-                continue  # the 2^-8 regular runs are a shorter window: printed, not gated
+                continue  # a shorter regular window (LIQUID_SCALE_L8_REGULAR_STEPS): printed, not gated
             text += ["", "[[ratio]]", f'scene = "{scene}"', f"level = {level}", f'window = "{r["window"]}"']
             text += [f"{f} = {r[f]:.4g}" for f in GATED]
         pathlib.Path(path).write_text("\n".join(text) + "\n")
