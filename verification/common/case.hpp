@@ -109,17 +109,17 @@ struct CaseOptions {
   std::optional<Perturbation> perturb;        ///< --perturb first-order
   std::optional<std::string> trees_dir;       ///< --trees DIR: write the trees checked
   std::vector<std::string> methods;           ///< --methods A,B: run only these rows (empty: all)
-  std::optional<std::string> reference;  ///< --reference-method M: the method of a flow study's reference run
-  std::optional<std::uint64_t> seed;     ///< --seed N: the random draws of a sampled problem
-  std::optional<long> particles;         ///< --particles N: the size of a sampled problem
-  std::optional<double> radius;          ///< --radius R: a sampled sphere's radius (domain units)
-  std::optional<double> aspect;          ///< --aspect A: a sampled box's width over its height
-  std::optional<int> merge_wait;         ///< --merge-wait N: SPH, passes before a split's children merge
-  std::optional<double> duration;        ///< --duration T: simulated seconds of a long run
-  std::optional<SizeList> sizes;         ///< --sizes D:N,N: a size study's dimension and divisions
-  std::optional<double> resample_travel;  ///< --resample-travel S: SPH, spacings travelled between passes
-  long max_cells = 0;                     ///< budget: refuse rows above this many cells (0: no limit)
-  bool full = false;                      ///< the full suite's extent rather than the quick one
+  std::optional<std::string> reference;       ///< --reference-method M: a flow study's reference
+  std::optional<std::uint64_t> seed;          ///< --seed N: the random draws of a sampled problem
+  std::optional<long> particles;              ///< --particles N: the size of a sampled problem
+  std::optional<double> radius;               ///< --radius R: a sampled sphere's radius (domain units)
+  std::optional<double> aspect;               ///< --aspect A: a sampled box's width over its height
+  std::optional<int> merge_wait;              ///< --merge-wait N: SPH, passes before a split's children merge
+  std::optional<double> duration;             ///< --duration T: simulated seconds of a long run
+  std::optional<SizeList> sizes;              ///< --sizes D:N,N: a size study's dimension and divisions
+  std::optional<double> resample_travel;      ///< --resample-travel S: SPH, spacings travelled between passes
+  long max_cells = 0;                         ///< budget: refuse rows above this many cells (0: no limit)
+  bool full = false;                          ///< the full suite's extent rather than the quick one
 };
 
 /// The budget's unit. A study's cost is counted in cells of kCellBytes: peak memory measured on

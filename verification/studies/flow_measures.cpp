@@ -129,27 +129,18 @@ double cheapest(const std::vector<std::pair<double, double>>& pts) {
 
 }  // namespace
 
-double seconds_at_error(const std::vector<double>& errors, const std::vector<double>& seconds, double target,
-                        Reach& how) {
-  const auto pts = log_points(errors, seconds);
-  const double x = std::log(target);
-  how = Reach::interpolated;
-  if (!pts.empty() && x >= pts.back().first) {
-    how = Reach::at_most;
-    return cheapest(pts);
+const char* reach_text(Reach how) {
+  switch (how) {
+    case Reach::run:
+      return "the run";
+    case Reach::interpolated:
+      return "log-log between two runs";
+    case Reach::at_most:
+      return "at most: its cheapest run, already more accurate";
+    case Reach::at_least:
+      return "at least: its most accurate run, not as accurate";
   }
-  if (const double y = between(pts, x); std::isfinite(y)) return std::exp(y);
-  how = Reach::extrapolated;
-  if (pts.size() < 2) return pts.empty() ? NAN : std::exp(pts[0].second);
-  // The power law through the points' mean with fit_order's least-squares slope (log base is moot).
-  std::vector<double> e, t;
-  double mx = 0, my = 0;
-  for (const auto& p : pts) {
-    e.push_back(std::exp(p.first)), t.push_back(std::exp(p.second));
-    mx += p.first / static_cast<double>(pts.size()), my += p.second / static_cast<double>(pts.size());
-  }
-  const double slope = fit_order(e, t);
-  return std::exp(my + (std::isfinite(slope) ? slope : 0.0) * (x - mx));
+  return "?";
 }
 
 SecondsAt seconds_at(const ErrorCurve& curve, double error) {
@@ -159,10 +150,36 @@ SecondsAt seconds_at(const ErrorCurve& curve, double error) {
   const double x = std::log(error);
   if (x < pts.front().first) {
     // More accurate than any run: at least what the most accurate run took.
-    return {std::exp(pts.front().second), SecondsAt::Kind::at_least};
+    return {std::exp(pts.front().second), Reach::at_least};
   }
-  if (x > pts.back().first) return {cheapest(pts), SecondsAt::Kind::at_most};
-  return {std::exp(between(pts, x)), SecondsAt::Kind::value};
+  if (x > pts.back().first) return {cheapest(pts), Reach::at_most};
+  return {std::exp(between(pts, x)), Reach::interpolated};
+}
+
+EqualErrorRow speed_at_error(const ErrorCurve& method, std::span<const ErrorCurve> others, double error) {
+  LIQUID_VERIFY(!others.empty(), "{}: no other method to compare with", method.name);
+  EqualErrorRow row;
+  row.error = error;
+  row.seconds = seconds_at(method, error).seconds;
+  // The fastest other's time T = min over the others: bounded below by each one's value or lower
+  // bound (an upper bound says nothing below), above by each one's value or upper bound.
+  // The method named is the one setting the upper bound where there is one, else the lower one.
+  const double inf = std::numeric_limits<double>::infinity();
+  double below = inf, above = inf;
+  const ErrorCurve *by_below = nullptr, *by_above = nullptr;
+  SecondsAt s_below, s_above;
+  for (const ErrorCurve& c : others) {
+    const SecondsAt s = seconds_at(c, error);
+    const double b = s.how == Reach::at_most ? 0.0 : s.seconds;
+    const double a = s.how == Reach::at_least ? inf : s.seconds;
+    if (by_below == nullptr || b < below) below = b, by_below = &c, s_below = s;
+    if (a < above) above = a, by_above = &c, s_above = s;
+  }
+  row.fastest = by_above != nullptr ? by_above->name : by_below->name;
+  row.other = by_above != nullptr ? s_above : s_below;
+  row.low = below / row.seconds;
+  row.high = above / row.seconds;
+  return row;
 }
 
 std::vector<EqualErrorRow> speed_at_equal_error(const ErrorCurve& method,
@@ -184,30 +201,7 @@ std::vector<EqualErrorRow> speed_at_equal_error(const ErrorCurve& method,
   for (const ErrorCurve& c : others) take(c);
   std::sort(at.rbegin(), at.rend());
   at.erase(std::unique(at.begin(), at.end()), at.end());
-  const double inf = std::numeric_limits<double>::infinity();
-  for (double e : at) {
-    EqualErrorRow row;
-    row.error = e;
-    row.seconds = seconds_at(method, e).seconds;
-    // The fastest other's time T = min over the others: bounded below by each one's value or lower
-    // bound (an upper bound says nothing below), above by each one's value or upper bound.
-    // The method named is the one setting the upper bound where there is one, else the lower one.
-    double below = inf, above = inf;
-    const ErrorCurve *by_below = nullptr, *by_above = nullptr;
-    SecondsAt s_below, s_above;
-    for (const ErrorCurve& c : others) {
-      const SecondsAt s = seconds_at(c, e);
-      const double b = s.kind == SecondsAt::Kind::at_most ? 0.0 : s.seconds;
-      const double a = s.kind == SecondsAt::Kind::at_least ? inf : s.seconds;
-      if (by_below == nullptr || b < below) below = b, by_below = &c, s_below = s;
-      if (a < above) above = a, by_above = &c, s_above = s;
-    }
-    row.fastest = by_above != nullptr ? by_above->name : by_below->name;
-    row.other = by_above != nullptr ? s_above : s_below;
-    row.low = below / row.seconds;
-    row.high = above / row.seconds;
-    rows.push_back(row);
-  }
+  for (double e : at) rows.push_back(speed_at_error(method, others, e));
   return rows;
 }
 
@@ -223,10 +217,8 @@ Table equal_error_table(const std::vector<EqualErrorRow>& rows, const std::strin
                         const std::string& error, const std::string& method) {
   Table t(title, {error, method + " seconds", "fastest other", "its seconds", "read as", "speed-up"});
   for (const EqualErrorRow& row : rows) {
-    const char* how = row.other.kind == SecondsAt::Kind::value      ? "between its rows"
-                      : row.other.kind == SecondsAt::Kind::at_least ? "at least: its most accurate row"
-                                                                    : "at most: its cheapest row";
-    t.add_row({row.error, row.seconds, row.fastest, row.other.seconds, std::string(how), speedup_text(row)});
+    t.add_row({row.error, row.seconds, row.fastest, row.other.seconds, std::string(reach_text(row.other.how)),
+               speedup_text(row)});
   }
   return t;
 }

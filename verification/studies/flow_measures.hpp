@@ -87,15 +87,12 @@ Vec<Dim> taylor_green(const Vec<Dim>& x) {
   return u;
 }
 
-/// How seconds_at_error found its figure.
-enum class Reach { run, interpolated, at_most, extrapolated };
-
-/// Seconds a method needs to reach the error `target`, from its runs' (error, seconds): log-log
-/// interpolation between the two runs that bracket the target. When even its least accurate run
-/// beats the target, the cheapest such run's seconds (an upper bound: `at_most`); when its most
-/// accurate run does not reach it, the least-squares power law over all runs (`extrapolated`).
-double seconds_at_error(const std::vector<double>& errors, const std::vector<double>& seconds, double target,
-                        Reach& how);
+/// How a method's seconds at an error were found: its run, log-log between two runs, at most its
+/// cheapest run (already more accurate), or at least its most accurate run (not as accurate). Never
+/// extrapolated: a power law through two or three runs can put a method anywhere.
+enum class Reach { run, interpolated, at_most, at_least };
+/// The reading as words for a report's column ("log-log between two runs", ...).
+const char* reach_text(Reach how);
 
 /// A method's runs as (error, seconds) pairs, one per row of a study.
 struct ErrorCurve {
@@ -108,9 +105,8 @@ struct ErrorCurve {
 /// below it, at least what its most accurate run took (a more accurate run of the same method is taken
 /// to cost more); above it, at most its cheapest run (already more accurate).
 struct SecondsAt {
-  enum class Kind { value, at_least, at_most };
   double seconds = 0.0;
-  Kind kind = Kind::value;
+  Reach how = Reach::interpolated;  ///< interpolated, at_least or at_most
 };
 SecondsAt seconds_at(const ErrorCurve& curve, double error);
 
@@ -123,6 +119,10 @@ struct EqualErrorRow {
   double low = 0.0;      ///< the speed-up (fastest other / method) is at least this (0: no bound)
   double high = 0.0;     ///< and at most this (infinite: no bound); low == high when read exactly
 };
+
+/// At one error: the method's seconds against the fastest of `others`, whose bounds (SecondsAt) carry
+/// into the speed-up's.
+EqualErrorRow speed_at_error(const ErrorCurve& method, std::span<const ErrorCurve> others, double error);
 
 /// Speed at equal error over the whole range where it can be read: at every run's error (any method's)
 /// inside the range of `method`'s errors, the method's seconds against the fastest of `others`. The

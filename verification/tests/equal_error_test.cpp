@@ -17,7 +17,7 @@ TEST(EqualErrorTest, ReadsAPowerLawBetweenRuns) {
   const ErrorCurve c{"m", {0.04, 0.02, 0.01}, {1.0, 8.0, 64.0}};  // t = (0.04 / e)^3
   for (double e : {0.04, 0.03, 0.02, 0.013, 0.01}) {
     const SecondsAt s = seconds_at(c, e);
-    EXPECT_EQ(s.kind, SecondsAt::Kind::value) << e;
+    EXPECT_EQ(s.how, Reach::interpolated) << e;
     EXPECT_NEAR(s.seconds, std::pow(0.04 / e, 3.0), 1e-12 * std::pow(0.04 / e, 3.0)) << e;
   }
 }
@@ -27,10 +27,10 @@ TEST(EqualErrorTest, ReadsAPowerLawBetweenRuns) {
 TEST(EqualErrorTest, BoundsOutsideTheRuns) {
   const ErrorCurve c{"m", {0.04, 0.01, 0.02}, {3.0, 64.0, 8.0}};  // rows in any order
   const SecondsAt fine = seconds_at(c, 0.005);
-  EXPECT_EQ(fine.kind, SecondsAt::Kind::at_least);
+  EXPECT_EQ(fine.how, Reach::at_least);
   EXPECT_DOUBLE_EQ(fine.seconds, 64.0);
   const SecondsAt coarse = seconds_at(c, 0.1);
-  EXPECT_EQ(coarse.kind, SecondsAt::Kind::at_most);
+  EXPECT_EQ(coarse.how, Reach::at_most);
   EXPECT_DOUBLE_EQ(coarse.seconds, 3.0);
 }
 
@@ -59,13 +59,13 @@ TEST(EqualErrorTest, SpeedUpAgainstTheFastestOther) {
   // At 0.008, beyond A's most accurate run (at least 16 s), B 31.25 s: the fastest takes
   // at least 16 s, at most 31.25 s; B sets the upper bound and is named.
   EXPECT_EQ(rows[2].fastest, "b");
-  EXPECT_EQ(rows[2].other.kind, SecondsAt::Kind::value);
+  EXPECT_EQ(rows[2].other.how, Reach::interpolated);
   EXPECT_NEAR(rows[2].low * rows[2].seconds, 16.0, 1e-9);
   EXPECT_NEAR(rows[2].high * rows[2].seconds, 31.25, 1e-9);
   // At 0.005 neither brackets it: at least min(16, 31.25) = 16 s against the method's 16 s, no upper bound.
   EXPECT_NEAR(rows[3].low, 1.0, 1e-12);
   EXPECT_TRUE(std::isinf(rows[3].high));
-  EXPECT_EQ(rows[3].other.kind, SecondsAt::Kind::at_least);
+  EXPECT_EQ(rows[3].other.how, Reach::at_least);
   EXPECT_EQ(speedup_text(rows[3]), ">= 1x");
 }
 

@@ -204,7 +204,7 @@ CaseResult run(const CaseOptions& options) {
               {"method", "finest", "steps", "particles", "distance", "front", "profile L1", "profile L-inf",
                "seconds", "front at 0.15 s", "reference", "volume at 0.3 s"});
   Json series = Json::array();
-  std::map<std::string, std::pair<std::vector<double>, std::vector<double>>> curves;  // errors, seconds
+  std::map<std::string, ErrorCurve> curves;
   for (const FlowMethod& m : methods) {
     std::vector<double> errors, seconds, hs;
     for (int level : levels) {
@@ -233,19 +233,18 @@ CaseResult run(const CaseOptions& options) {
     series.push(series_entry(fmt::format("{}: seconds against the distance from the reference", name), m.name,
                              errors, seconds, "distance from the reference (column heights)",
                              "seconds to 0.3 s"));
-    curves[m.name] = {errors, seconds};
+    curves[m.name] = {m.name, errors, seconds};
   }
   result.fields.set("series", std::move(series));
   result.tables.push_back(std::move(table));
   if (!curves.contains("adaptive-rbf")) return result;
   // Speed at equal error, wherever it can be read: at every row's distance inside the adaptive rows'
   // range, the adaptive run's seconds (between its rows) against the fastest regular method's.
-  const auto& [ae, as] = curves["adaptive-rbf"];
   std::vector<ErrorCurve> regular;
   for (const FlowMethod& m : methods)
-    if (!m.adaptive) regular.push_back({m.name, curves[m.name].first, curves[m.name].second});
+    if (!m.adaptive) regular.push_back(curves[m.name]);
   if (regular.empty()) return result;
-  const std::vector<EqualErrorRow> equal = speed_at_equal_error({"adaptive-rbf", ae, as}, regular);
+  const std::vector<EqualErrorRow> equal = speed_at_equal_error(curves["adaptive-rbf"], regular);
   if (equal.empty()) {
     result.notes.push_back(
         "speed at equal error: the adaptive rows give no range of distances to read it over");

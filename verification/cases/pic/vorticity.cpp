@@ -175,11 +175,11 @@ struct Run {
   double seconds() const { return seconds_per_step * static_cast<double>(steps); }
 };
 
-/// Seconds a method's runs need to reach `target` (seconds_at_error over their errors at 4T).
-double seconds_at_error(const std::vector<Run>& runs, double target, Reach& how) {
-  std::vector<double> errors, seconds;
-  for (const Run& r : runs) errors.push_back(r.at[2].error), seconds.push_back(r.seconds());
-  return verification::seconds_at_error(errors, seconds, target, how);
+/// A method's runs as (L-inf error at 4T, seconds), for the readings of speed at equal error.
+ErrorCurve error_curve(const std::string& name, const std::vector<Run>& runs) {
+  ErrorCurve c{name, {}, {}};
+  for (const Run& r : runs) c.errors.push_back(r.at[2].error), c.seconds.push_back(r.seconds());
+  return c;
 }
 
 template <int Dim>
@@ -365,20 +365,18 @@ CaseResult run(const CaseOptions& options) {
       "speed at equal error: seconds to 4T for each method at the adaptive RBF finest row's L-inf error",
       {"method", "L-inf error at 4T", "seconds", "from", "adaptive / this"});
   const double target = rbf.at[2].error;
-  double fastest = std::numeric_limits<double>::infinity();
-  std::string fastest_name;
-  bool fastest_bound = false;  // the fastest time is an upper bound, so the ratio is a lower one
+  std::vector<ErrorCurve> regular;
+  for (const Method& m : methods())
+    if (!m.adaptive) regular.push_back(error_curve(m.name, runs[m.name]));
   for (const Method& m : methods()) {
-    Reach how = Reach::run;
-    const double t =
-        std::string(m.name) == "adaptive-rbf" ? rbf.seconds() : seconds_at_error(runs[m.name], target, how);
-    const char* from = how == Reach::run            ? "the run"
-                       : how == Reach::interpolated ? "log-log between two levels"
-                       : how == Reach::at_most      ? "at most: its cheapest run, already more accurate"
-                                                    : "power law over the levels (extrapolated)";
-    equal.add_row({std::string(m.name), target, t, std::string(from), rbf.seconds() / t});
-    if (!m.adaptive && t < fastest) fastest = t, fastest_name = m.name, fastest_bound = how == Reach::at_most;
+    const bool own = std::string(m.name) == "adaptive-rbf";
+    const SecondsAt t =
+        own ? SecondsAt{rbf.seconds(), Reach::run} : seconds_at(error_curve(m.name, runs[m.name]), target);
+    equal.add_row(
+        {std::string(m.name), target, t.seconds, std::string(reach_text(t.how)), rbf.seconds() / t.seconds});
   }
+  const EqualErrorRow at_finest =
+      speed_at_error(error_curve("adaptive-rbf", runs["adaptive-rbf"]), regular, target);
   // Which phases the adaptive run spends its time in, largest first.
   std::vector<std::pair<double, std::string>> spent;
   for (const auto& [name, seconds] : rbf.phases)
@@ -388,37 +386,26 @@ CaseResult run(const CaseOptions& options) {
   const double total = rbf.phases.count("total") ? rbf.phases.at("total") : rbf.seconds();
   for (std::size_t i = 0; i < std::min<std::size_t>(3, spent.size()); ++i)
     where += fmt::format("{}{} {:.0f}%", i ? ", " : "", spent[i].second, 100.0 * spent[i].first / total);
+  const char* verdict = at_finest.low >= 1.0   ? "goal met"
+                        : at_finest.high < 1.0 ? "goal not met"
+                                               : "undecided";
   result.notes.push_back(
-      rbf.seconds() <= fastest
-          ? fmt::format(
-                "speed at equal error (L-inf {:.3f} at 4T): adaptive RBF {:.2f} s, as fast as or faster "
-                "than the fastest regular baseline ({} {:.2f} s): goal met",
-                target, rbf.seconds(), fastest_name, fastest)
-          : fmt::format(
-                "speed at equal error (L-inf {:.3f} at 4T): adaptive RBF {:.2f} s is {}{:.1f} times slower "
-                "than the fastest regular baseline ({} {}{:.3f} s): goal not met; its time goes to {}",
-                target, rbf.seconds(), fastest_bound ? "at least " : "", rbf.seconds() / fastest,
-                fastest_name, fastest_bound ? "at most " : "", fastest, where));
+      fmt::format("speed at equal error (L-inf {:.3f} at 4T): adaptive RBF {:.2f} s against the fastest "
+                  "regular baseline ({} "
+                  "{:.3f} s, {}): speed-up {}, {}; its time goes to {}",
+                  target, rbf.seconds(), at_finest.fastest, at_finest.other.seconds,
+                  reach_text(at_finest.other.how), speedup_text(at_finest), verdict, where));
   // The paper's preset at its own error: what the fastest regular baseline needs to get there.
   {
     const Run& v = runs[kPaper].back();
-    double best = std::numeric_limits<double>::infinity();
-    std::string best_name;
-    bool bound = false;
-    for (const Method& m : methods()) {
-      if (m.adaptive) continue;
-      Reach how = Reach::run;
-      const double t = seconds_at_error(runs[m.name], v.at[2].error, how);
-      if (t < best) best = t, best_name = m.name, bound = how == Reach::at_most;
-    }
+    const EqualErrorRow p = speed_at_error(error_curve(kPaper, runs[kPaper]), regular, v.at[2].error);
     result.notes.push_back(fmt::format(
         "{} (PHS r^5 + degree 2, the paper's reseeding), finest row: L-inf {:.3f} at 4T (adaptive "
-        "RBF {:.3f}), "
-        "energy kept {:.4f} (APIC {:.4f}), {:.2f} s; the fastest regular baseline at that error: "
-        "{} {}{:.3f} s "
-        "({}{:.1f} times faster)",
-        kPaper, v.at[2].error, rbf.at[2].error, v.at[2].energy, apic.at[2].energy, v.seconds(), best_name,
-        bound ? "at most " : "", best, bound ? "at least " : "", v.seconds() / best));
+        "RBF {:.3f}), energy kept {:.4f} (APIC {:.4f}), {:.2f} s; the fastest regular baseline at that "
+        "error: "
+        "{} {:.3f} s ({}): speed-up {}",
+        kPaper, v.at[2].error, rbf.at[2].error, v.at[2].energy, apic.at[2].energy, v.seconds(), p.fastest,
+        p.other.seconds, reach_text(p.other.how), speedup_text(p)));
   }
   result.fields.set("series", std::move(series));
   // Where the adaptive run's error sits: outside the refined region its cells are the regular runs'
@@ -440,15 +427,8 @@ CaseResult run(const CaseOptions& options) {
   result.tables.push_back(std::move(equal));
   // And over the whole range of the adaptive rows' errors, against the fastest regular baseline there.
   {
-    const auto curve = [&](const Method& m) {
-      ErrorCurve c{m.name, {}, {}};
-      for (const Run& r : runs[m.name]) c.errors.push_back(r.at[2].error), c.seconds.push_back(r.seconds());
-      return c;
-    };
-    std::vector<ErrorCurve> regular;
-    for (const Method& m : methods())
-      if (!m.adaptive) regular.push_back(curve(m));
-    const std::vector<EqualErrorRow> rows = speed_at_equal_error(curve(methods().front()), regular);
+    const std::vector<EqualErrorRow> rows =
+        speed_at_equal_error(error_curve("adaptive-rbf", runs["adaptive-rbf"]), regular);
     if (!rows.empty()) {
       result.tables.push_back(equal_error_table(
           rows,
