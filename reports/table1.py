@@ -266,24 +266,38 @@ def scale_table(rows):
     return lines
 
 
+# Levels the tier runs only when asked (LIQUID_SCALE_L8=1): their accepted ratios are checked when the run
+# made them and kept, unchecked, when it did not; a bless without them keeps the accepted ones.
+OPTIONAL_LEVELS = (8,)
+
+
 def gate(rows, path, bless):
     """Compares the ratios with the accepted ones (or writes them); returns the exit status."""
     if bless:
+        kept = {}
+        if pathlib.Path(path).exists():
+            accepted, _ = read_reference(path)
+            kept = {k: e for k, e in accepted.items() if k[1] in OPTIONAL_LEVELS and k not in rows}
+        entries = {k: {"window": r["window"], **{f: r[f] for f in GATED}} for k, r in rows.items()
+                   if r["same_window"]}  # a shorter regular window (LIQUID_SCALE_L8_REGULAR_STEPS): not gated
+        entries.update(kept)
         text = ["# Accepted ratios of the scale tier (ci/bench-scenes --paper-sizes), checked by reports/table1.py.",
                 "# Written by LIQUID_SCALE_BLESS=1 ci/bench-scenes --paper-sizes; a commit that moves them says why.",
                 "# time: adaptive / regular APIC seconds a step; cells, particles: adaptive / regular.", "",
                 "[tolerance]", "time_rel = 0.3", "share_rel = 0.05"]
-        for (scene, level), r in rows.items():
-            if not r["same_window"]:
-                continue  # a shorter regular window (LIQUID_SCALE_L8_REGULAR_STEPS): printed, not gated
-            text += ["", "[[ratio]]", f'scene = "{scene}"', f"level = {level}", f'window = "{r["window"]}"']
-            text += [f"{f} = {r[f]:.4g}" for f in GATED]
+        for (scene, level), e in sorted(entries.items()):
+            text += ["", "[[ratio]]", f'scene = "{scene}"', f"level = {level}", f'window = "{e["window"]}"']
+            text += [f"{f} = {e[f]:.4g}" for f in GATED]
         pathlib.Path(path).write_text("\n".join(text) + "\n")
-        print(f"table1: wrote {path}")
+        print(f"table1: wrote {path}" + (f" (kept the accepted 2^-{', 2^-'.join(str(k[1]) for k in kept)} rows "
+                                         f"this run did not make)" if kept else ""))
         return 0
     accepted, tol = read_reference(path)
     failures = []
     for key, entry in accepted.items():
+        if key not in rows and key[1] in OPTIONAL_LEVELS:
+            print(f"table1 gate: {key[0]} 2^-{key[1]}: not run (LIQUID_SCALE_L8=1 runs it), not checked")
+            continue
         if key not in rows:
             failures.append(f"{path}: {key[0]} at 2^-{key[1]}: accepted, but this run made no such pair of runs")
             continue
