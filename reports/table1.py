@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """Table 1 of RBF Liquids for our scenes, from the JSON files ci/bench-scenes writes.
 
-Usage: table1.py DIR [--gate REFERENCE.toml [--bless]]
+Usage: table1.py DIR [--gate REFERENCE.toml [--bless | --bless-new]]
 
 Every DIR/<scene>-<dim>d-L<level>-<method>-r<k>.json is one run (liquid run --json). Per scene,
 dimension and level: the median over repeats of each figure; the adaptive run's fluid cells and
@@ -14,7 +14,8 @@ With --gate (the scale tier, ci/bench-scenes --paper-sizes): a table of the rati
 size (adaptive over regular APIC seconds a step, shares of fluid cells and particles, core-us per
 particle-step beside the paper's row at the same h, peak memory), checked against the accepted
 ratios in REFERENCE.toml: exit 1 naming every ratio that grew past its tolerance; --bless writes
-the file from this run instead.
+the file from this run instead; --bless-new checks the accepted ratios and, when they pass, adds
+this run's rows that have none (a first 2^-8 run), leaving the accepted ones as they are.
 """
 
 import json
@@ -271,26 +272,30 @@ def scale_table(rows):
 OPTIONAL_LEVELS = (8,)
 
 
-def gate(rows, path, bless):
+def write_reference(path, entries, note):
+    """Writes the accepted ratios {(scene, level): {window, figures}} in order."""
+    text = ["# Accepted ratios of the scale tier (ci/bench-scenes --paper-sizes), checked by reports/table1.py.",
+                "# Written by LIQUID_SCALE_BLESS=1 ci/bench-scenes --paper-sizes; a commit that moves them says why.",
+                "# time: adaptive / regular APIC seconds a step; cells, particles: adaptive / regular.", "",
+            "[tolerance]", "time_rel = 0.3", "share_rel = 0.05"]
+    for (scene, level), e in sorted(entries.items()):
+        text += ["", "[[ratio]]", f'scene = "{scene}"', f"level = {level}", f'window = "{e["window"]}"']
+        text += [f"{f} = {e[f]:.4g}" for f in GATED]
+    pathlib.Path(path).write_text("\n".join(text) + "\n")
+    print(f"table1: wrote {path}{note}")
+
+
+def gate(rows, path, bless, bless_new=False):
     """Compares the ratios with the accepted ones (or writes them); returns the exit status."""
+    # A shorter regular window (LIQUID_SCALE_L8_REGULAR_STEPS) is printed, never accepted.
+    measured = {k: {"window": r["window"], **{f: r[f] for f in GATED}} for k, r in rows.items() if r["same_window"]}
     if bless:
         kept = {}
         if pathlib.Path(path).exists():
             accepted, _ = read_reference(path)
             kept = {k: e for k, e in accepted.items() if k[1] in OPTIONAL_LEVELS and k not in rows}
-        entries = {k: {"window": r["window"], **{f: r[f] for f in GATED}} for k, r in rows.items()
-                   if r["same_window"]}  # a shorter regular window (LIQUID_SCALE_L8_REGULAR_STEPS): not gated
-        entries.update(kept)
-        text = ["# Accepted ratios of the scale tier (ci/bench-scenes --paper-sizes), checked by reports/table1.py.",
-                "# Written by LIQUID_SCALE_BLESS=1 ci/bench-scenes --paper-sizes; a commit that moves them says why.",
-                "# time: adaptive / regular APIC seconds a step; cells, particles: adaptive / regular.", "",
-                "[tolerance]", "time_rel = 0.3", "share_rel = 0.05"]
-        for (scene, level), e in sorted(entries.items()):
-            text += ["", "[[ratio]]", f'scene = "{scene}"', f"level = {level}", f'window = "{e["window"]}"']
-            text += [f"{f} = {e[f]:.4g}" for f in GATED]
-        pathlib.Path(path).write_text("\n".join(text) + "\n")
-        print(f"table1: wrote {path}" + (f" (kept the accepted 2^-{', 2^-'.join(str(k[1]) for k in kept)} rows "
-                                         f"this run did not make)" if kept else ""))
+        write_reference(path, measured | kept,
+                        f" (kept the accepted rows this run did not make: {sorted(kept)})" if kept else "")
         return 0
     accepted, tol = read_reference(path)
     failures = []
@@ -311,14 +316,24 @@ def gate(rows, path, bless):
                 failures.append(f"{key[0]} at 2^-{key[1]}: {GATE_HELP[f]} {now:.4g} > {limit:.4g}")
     for f in failures:
         print(f"table1 gate: {f}", file=sys.stderr)
-    return 1 if failures else 0
+    if failures:
+        return 1
+    if bless_new:
+        new = {k: e for k, e in measured.items() if k not in accepted}
+        if new:
+            write_reference(path, {k: {"window": e["window"], **{f: e[f] for f in GATED}} for k, e in accepted.items()}
+                            | new, f" (added {sorted(new)}; the accepted rows unchanged)")
+        else:
+            print(f"table1: every row of this run already has accepted ratios; {path} unchanged")
+    return 0
 
 
 def main():
     args = sys.argv[1:]
-    bless = "--bless" in args
-    if bless:
-        args.remove("--bless")
+    bless, bless_new = "--bless" in args, "--bless-new" in args
+    for flag in ("--bless", "--bless-new"):
+        if flag in args:
+            args.remove(flag)
     reference = None
     if "--gate" in args:
         i = args.index("--gate")
@@ -327,7 +342,7 @@ def main():
             return 2
         reference = args[i + 1]
         del args[i:i + 2]
-    if len(args) != 1 or (bless and reference is None):
+    if len(args) != 1 or ((bless or bless_new) and reference is None) or (bless and bless_new):
         print(__doc__, file=sys.stderr)
         return 2
     folder = pathlib.Path(args[0])
@@ -392,7 +407,7 @@ def main():
     print(text)
     if reference:
         try:
-            return gate(rows, reference, bless)
+            return gate(rows, reference, bless, bless_new)
         except (ValueError, tomllib.TOMLDecodeError, OSError) as e:
             print(f"table1 gate: {e}", file=sys.stderr)
             return 2
