@@ -164,6 +164,10 @@ void add_study_flags(CLI::App& app, StudyFlags& f) {
       "--reference-method", f.reference,
       "dam-break-convergence: the method of the reference run, one level finer than the finest row "
       "(default: regular-apic; adaptive-rbf in 3D past level 7)");
+  app.add_option("--band", f.band,
+                 "flow studies: the adaptive rows keep cells within K face hops of a surface cell at the "
+                 "finest level (1 to 4; default 2, the paper's)")
+      ->check(CLI::Range(1, 4));
   app.add_option("--seed", f.seed,
                  "sampled problems (the SPH resampling and surface cases): the random draws");
   app.add_option("--particles", f.particles,
@@ -207,7 +211,7 @@ CaseOptions case_options(const StudyFlags& f, const CaseInfo& info) {
                    Option::algebraic,    Option::perturb,    Option::trees,           Option::methods,
                    Option::seed,         Option::particles,  Option::radius,          Option::aspect,
                    Option::merge_wait,   Option::duration,   Option::sizes,           Option::resample_travel,
-                   Option::reference})
+                   Option::reference,    Option::band})
     if (f.given(o) && !info.accepts_option(o)) refused.push_back(flag_of(o));
   if (!refused.empty()) {
     std::vector<std::string> accepted;
@@ -248,6 +252,7 @@ CaseOptions case_options(const StudyFlags& f, const CaseInfo& info) {
     o.methods = f.methods;
   }
   if (f.given(Option::reference)) o.reference = f.reference;
+  if (f.given(Option::band)) o.band = f.band;
   if (f.given(Option::seed)) {
     // Digits only, within 64 bits (a parser for unsigned integers would wrap -3 or saturate 1e23).
     std::uint64_t seed = 0;
@@ -292,6 +297,7 @@ std::string echo(const std::string& case_name, const StudyFlags& f) {
   s += show(Option::trees, f.trees_dir);
   s += show(Option::methods, fmt::format("{}", fmt::join(f.methods, ",")));
   s += show(Option::reference, f.reference);
+  s += show(Option::band, std::to_string(f.band));
   s += show(Option::seed, f.seed);
   s += show(Option::particles, std::to_string(f.particles));
   s += show(Option::radius, fmt::format("{:g}", f.radius));

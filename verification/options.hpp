@@ -30,6 +30,7 @@ struct StudyFlags {
   std::string trees_dir;
   std::vector<std::string> methods;
   std::string reference;
+  int band = 2;
   std::string seed;
   long particles = 0;
   double radius = 0.0, aspect = 1.0;

@@ -59,6 +59,8 @@ const char* flag_of(Option option) {
       return "--sizes";
     case Option::reference:
       return "--reference-method";
+    case Option::band:
+      return "--band";
     case Option::resample_travel:
       return "--resample-travel";
   }

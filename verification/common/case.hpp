@@ -44,7 +44,8 @@ enum class Option {
   duration,
   sizes,
   resample_travel,
-  reference
+  reference,
+  band
 };
 using OptionSet = std::vector<Option>;
 /// The command-line flag of an option ("--max-jump").
@@ -110,6 +111,7 @@ struct CaseOptions {
   std::optional<std::string> trees_dir;       ///< --trees DIR: write the trees checked
   std::vector<std::string> methods;           ///< --methods A,B: run only these rows (empty: all)
   std::optional<std::string> reference;       ///< --reference-method M: a flow study's reference
+  std::optional<int> band;                    ///< --band K: a flow study's adaptive rows, finest-level hops
   std::optional<std::uint64_t> seed;          ///< --seed N: the random draws of a sampled problem
   std::optional<long> particles;              ///< --particles N: the size of a sampled problem
   std::optional<double> radius;               ///< --radius R: a sampled sphere's radius (domain units)

@@ -15,6 +15,13 @@
 
 namespace liquid::verification {
 
+std::string band_note(int band) {
+  return fmt::format(
+      "adaptive runs: cells within {} face hop{} of a surface cell at the finest level "
+      "(--band; the default and the paper's: 2)",
+      band, band == 1 ? "" : "s");
+}
+
 std::vector<FlowMethod> chosen_methods(std::span<const FlowMethod> all, const std::vector<std::string>& names,
                                        const char* flag) {
   if (names.empty()) return {all.begin(), all.end()};

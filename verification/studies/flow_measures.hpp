@@ -31,6 +31,9 @@ struct FlowMethod {
 /// when none is named); throws naming a method that is not one of them.
 std::vector<FlowMethod> chosen_methods(std::span<const FlowMethod> all, const std::vector<std::string>& names,
                                        const char* flag = "--methods");
+/// The note a flow study prints when `--band K` set its adaptive runs' band (finest-level face hops
+/// around a surface cell; the default and the paper's is 2).
+std::string band_note(int band);
 /// The flow studies' methods, side by side: adaptive RBF with the default transfer and reseeding,
 /// the same with the paper's preset, RBF on the uniform tree, and the regular baselines PIC, FLIP and
 /// APIC.

@@ -116,9 +116,10 @@ Shape measure(const pic::AdaptivePic<Dim>& sim) {
 }
 
 template <int Dim>
-Run run_method(const FlowMethod& m, int level) {
+Run run_method(const FlowMethod& m, int level, int band) {
   pic::PicOptions<Dim> o;
   o.adaptive = m.adaptive;
+  if (m.adaptive) o.band = band;
   o.transfer = m.transfer;
   o.finest_level = level;
   o.coarse_level = m.adaptive ? std::max(1, level - 3) : level;
@@ -190,7 +191,8 @@ CaseResult run(const CaseOptions& options) {
   const FlowMethod ref_method =
       options.reference ? chosen_methods(kMethods, {*options.reference}, "--reference-method").front()
                         : (affordable ? kMethods[1] : kMethods[0]);
-  const Run reference = run_method<Dim>(ref_method, ref_level);
+  const int band = options.band.value_or(pic::PicOptions<Dim>{}.band);
+  const Run reference = run_method<Dim>(ref_method, ref_level, band);
   result.notes.push_back(
       fmt::format("reference: {} at finest level {}, {:.1f} s, {:.0f} particles{}", ref_method.name,
                   ref_level, reference.seconds, reference.particles,
@@ -198,6 +200,7 @@ CaseResult run(const CaseOptions& options) {
                       ? ""
                       : " (the default past level 7 in 3D: regular APIC there takes hours; "
                         "rows of the reference's own kind are favoured, see --reference-method)"));
+  if (options.band) result.notes.push_back(band_note(band));
   Table table(fmt::format("dam break ({}D): distance from the reference (front and surface heights, in "
                           "column heights) against seconds to 0.3 s",
                           Dim),
@@ -208,7 +211,7 @@ CaseResult run(const CaseOptions& options) {
   for (const FlowMethod& m : methods) {
     std::vector<double> errors, seconds, hs;
     for (int level : levels) {
-      const Run r = run_method<Dim>(m, level);
+      const Run r = run_method<Dim>(m, level, band);
       const Distance d = distance(r, reference);
       const double e = d.measure();
       fmt::print("  {} L{}: distance from the reference {:.3f} (front {:.3f}, profile {:.3f}) in {:.2f} s\n",
@@ -270,12 +273,12 @@ LIQUID_VERIFICATION_CASE(
      "regular APIC run, speed at equal error for adaptive RBF, APIC and FLIP",
      true,
      run<2>,
-     {Option::levels, Option::methods, Option::reference}});
+     {Option::levels, Option::methods, Option::reference, Option::band}});
 LIQUID_VERIFICATION_CASE({"dam-break-convergence-3d",
                           "dam break (3D, levels 4-6, reference at 7): front and surface against a finer "
                           "regular APIC run, speed at equal error for adaptive RBF, APIC and FLIP",
                           false,
                           run<3>,
-                          {Option::levels, Option::methods, Option::reference}});
+                          {Option::levels, Option::methods, Option::reference, Option::band}});
 
 }  // namespace liquid::verification

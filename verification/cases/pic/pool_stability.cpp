@@ -27,6 +27,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <optional>
 #include <string>
 #include <tuple>
 #include <utility>
@@ -91,8 +92,9 @@ std::pair<double, double> growth_rate(const std::vector<double>& t, const std::v
 }
 
 template <int Dim>
-Outcome run_pool(const FlowMethod& m, const Tank& tank) {
+Outcome run_pool(const FlowMethod& m, const Tank& tank, std::optional<int> band) {
   pic::PicOptions<Dim> o;
+  if (band) o.band = *band;
   Vec<Dim> size = Vec<Dim>::Ones();
   size[0] = tank.length;
   o.domain = Box<Dim>{Vec<Dim>::Zero(), size};
@@ -134,10 +136,10 @@ Outcome run_pool(const FlowMethod& m, const Tank& tank) {
 }
 
 template <int Dim>
-void study(const Tank& tank, const std::vector<FlowMethod>& methods, Table& table, Table& series,
-           CaseResult& result) {
+void study(const Tank& tank, const std::vector<FlowMethod>& methods, std::optional<int> band, Table& table,
+           Table& series, CaseResult& result) {
   for (const FlowMethod& m : methods) {
-    const Outcome o = run_pool<Dim>(m, tank);
+    const Outcome o = run_pool<Dim>(m, tank, band);
     const double doubling = o.rate > 0 ? std::log(2.0) / o.rate : std::numeric_limits<double>::infinity();
     fmt::print(
         "  {}D {} L{} {}: largest speed {:.2e} sqrt(gH), growth {:.3f} +- {:.3f} / s, |div u| h after the "
@@ -182,6 +184,7 @@ void study(const Tank& tank, const std::vector<FlowMethod>& methods, Table& tabl
 
 CaseResult run(const CaseOptions& options) {
   CaseResult result;
+  if (options.band) result.notes.push_back(band_note(*options.band));
   Table table("still pool over a long run: the largest particle speed and its growth",
               {"dim", "tank", "finest", "method", "steps", "T (s)", "max |v_p| / sqrt(gH)", "at the end",
                "growth rate (1/s)", "+-", "doubling time (s)", "max |div u| h after projection / sqrt(gH)",
@@ -199,12 +202,12 @@ CaseResult run(const CaseOptions& options) {
   const double end = options.duration.value_or(30.0);
   for (int finest = levels.first; finest <= levels.last; ++finest) {
     if (!options.full) {
-      study<3>({"cube", 1.0, finest, end}, methods, table, series, result);
+      study<3>({"cube", 1.0, finest, end}, methods, options.band, table, series, result);
       continue;
     }
-    study<2>({"square", 1.0, finest, end}, methods, table, series, result);
-    study<3>({"cube", 1.0, finest, end}, methods, table, series, result);
-    study<3>({"2:1:1", 2.0, finest, end}, methods, table, series, result);
+    study<2>({"square", 1.0, finest, end}, methods, options.band, table, series, result);
+    study<3>({"cube", 1.0, finest, end}, methods, options.band, table, series, result);
+    study<3>({"2:1:1", 2.0, finest, end}, methods, options.band, table, series, result);
   }
   result.tables.push_back(std::move(table));
   result.tables.push_back(std::move(series));
@@ -219,6 +222,6 @@ LIQUID_VERIFICATION_CASE(
      "spurious speed and its exponential growth rate, default against the paper's preset",
      true,
      run,
-     {Option::levels, Option::methods, Option::duration}});
+     {Option::levels, Option::methods, Option::duration, Option::band}});
 
 }  // namespace liquid::verification

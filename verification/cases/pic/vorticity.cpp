@@ -41,6 +41,7 @@
 #include <cstdio>
 #include <limits>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -183,8 +184,9 @@ ErrorCurve error_curve(const std::string& name, const std::vector<Run>& runs) {
 }
 
 template <int Dim>
-Run run_method(const Method& m, int level) {
+Run run_method(const Method& m, int level, std::optional<int> band) {
   pic::PicOptions<Dim> o;
+  if (band) o.band = *band;
   o.domain = Box<Dim>{Vec<Dim>::Zero(), Vec<Dim>::Constant(M_PI)};
   o.gravity = Vec<Dim>::Zero();
   o.adaptive = m.adaptive;
@@ -232,6 +234,7 @@ Run run_method(const Method& m, int level) {
 template <int Dim>
 CaseResult run(const CaseOptions& options) {
   CaseResult result;
+  if (options.band) result.notes.push_back(band_note(*options.band));
   const LevelRange levels =
       options.levels.value_or(Dim == 2 ? (options.full ? LevelRange{4, 6} : LevelRange{3, 5})
                                        : (options.full ? LevelRange{3, 5} : LevelRange{2, 3}));
@@ -256,7 +259,7 @@ CaseResult run(const CaseOptions& options) {
   for (const Method& m : selected) {
     std::vector<double> err4, seconds;
     for (int level = levels.first; level <= levels.last; ++level) {
-      const Run r = run_method<Dim>(m, level);
+      const Run r = run_method<Dim>(m, level, options.band);
       runs[m.name].push_back(r);
       fmt::print("  {} L{}: L-inf error at 4T {:.3f}, kinetic energy kept {:.3f}, {:.2f} s\n", m.name, level,
                  r.at[2].error, r.at[2].energy, r.seconds());
@@ -451,13 +454,13 @@ LIQUID_VERIFICATION_CASE({"vorticity",
                           "adaptive RBF, regular RBF, PIC, FLIP and APIC (Fig. 11)",
                           true,
                           run<2>,
-                          {Option::levels, Option::methods}});
+                          {Option::levels, Option::methods, Option::band}});
 LIQUID_VERIFICATION_CASE(
     {"vorticity-3d",
      "Taylor-Green cells (w = 0) in a closed cube: energy, enstrophy and velocity error kept by "
      "adaptive RBF, regular RBF, PIC, FLIP and APIC",
      true,
      run<3>,
-     {Option::levels, Option::methods}});
+     {Option::levels, Option::methods, Option::band}});
 
 }  // namespace liquid::verification
