@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """Table 1 of RBF Liquids for our scenes, from the JSON files ci/bench-scenes writes.
 
-Usage: table1.py DIR [--gate REFERENCE.toml [--bless | --bless-new]]
+Usage: table1.py DIR [--gate REFERENCE.toml [--bless | --bless-new] [--levels "6 7"]]
 
 Every DIR/<scene>-<dim>d-L<level>-<method>-r<k>.json is one run (liquid run --json). Per scene,
 dimension and level: the median over repeats of each figure; the adaptive run's fluid cells and
@@ -15,7 +15,10 @@ size (adaptive over regular APIC seconds a step, shares of fluid cells and parti
 particle-step beside the paper's row at the same h, peak memory), checked against the accepted
 ratios in REFERENCE.toml: exit 1 naming every ratio that grew past its tolerance; --bless writes
 the file from this run instead; --bless-new checks the accepted ratios and, when they pass, adds
-this run's rows that have none (a first 2^-8 run), leaving the accepted ones as they are.
+this run's rows that have none (a first 2^-8 run, a first whole run), leaving the accepted ones as
+they are. Entries are per scene, level and window (the first N steps, or "to T s" for a whole run):
+a run is compared with those of its own window; --levels names the levels the run was asked for
+(default 6 and 7), and entries at other levels are kept and not checked.
 """
 
 import json
@@ -41,7 +44,7 @@ NAME = re.compile(r"^(?P<scene>.+)-(?P<dim>[23])d-L(?P<level>\d+)-(?P<method>[a-
 def median_run(runs):
     """Median of every figure over repeated runs."""
     out = {k: statistics.median(r[k] for r in runs)
-           for k in ("fluid_cells", "particles", "cells", "regular_cells", "regular_particles", "steps")}
+           for k in ("fluid_cells", "particles", "cells", "regular_cells", "regular_particles", "steps", "time")}
     out["peak_mb"] = statistics.median(r.get("peak_memory_mb", float("nan")) for r in runs)
     phases = set().union(*(r["seconds_per_step"] for r in runs))
     out["sec"] = {p: statistics.median(r["seconds_per_step"].get(p, 0.0) for r in runs) for p in phases}
@@ -194,12 +197,12 @@ def growth(groups, folder):
 
 
 GATED = ("time", "cells", "particles")
-GATE_HELP = {"time": "adaptive / regular APIC seconds a step", "cells": "adaptive / regular fluid cells",
+GATE_HELP = {"time": "adaptive / regular APIC seconds over the window", "cells": "adaptive / regular fluid cells",
              "particles": "adaptive / regular particles"}
 
 
 def read_reference(path):
-    """The accepted ratios: {(scene, level): {figure: value}}, and the tolerances. Strict: an unknown
+    """The accepted ratios: {(scene, level, window): {figure: value}}, and the tolerances. Strict: an unknown
     key, a missing one or a value that is not a positive number is an error naming the entry."""
     doc = tomllib.loads(pathlib.Path(path).read_text())
     unknown = set(doc) - {"tolerance", "ratio"}
@@ -217,7 +220,10 @@ def read_reference(path):
             if not isinstance(entry[f], (int, float)) or not entry[f] > 0 or math.isinf(entry[f]):
                 raise ValueError(f"{path}: [[ratio]] #{k + 1} ({entry['scene']}, {entry['level']}): '{f}' "
                                  f"must be a positive number, found {entry[f]!r}")
-        accepted[(entry["scene"], int(entry["level"]))] = entry
+        key = (entry["scene"], int(entry["level"]), entry["window"])
+        if key in accepted:
+            raise ValueError(f"{path}: [[ratio]] #{k + 1}: a second entry for {key}")
+        accepted[key] = entry
     for name in ("time_rel", "share_rel"):
         if not isinstance(tol[name], (int, float)) or not 0 <= tol[name] < 10:
             raise ValueError(f"{path}: tolerance.{name} must be a number in [0, 10), found {tol[name]!r}")
@@ -235,15 +241,18 @@ def scale_ratios(groups):
         # Over a window of simulated time (LIQUID_SCALE_UNTIL) the two runs may take different numbers
         # of steps: the gain is the seconds each needs for the whole window, which is the ratio of
         # seconds a step when the step counts agree.
+        # A window of simulated time: both runs end at the same time, in their own numbers of steps.
+        until = a["steps"] != g["steps"] and abs(a["time"] - g["time"]) <= 1e-9 * max(1.0, a["time"])
         core_us = 1e6 * ta * a["threads"] / a["particles"]
         paper = [p for p in PAPER.get(scene, []) if p[1] == f"2^-{level}"]
         paper_us = 1e6 * paper[0][10] * PAPER_CORES / paper[0][4] if paper else float("nan")
         rows[(f"{scene}-3d", level)] = {
             "time": ta * a["steps"] / (tg * g["steps"]), "cells": a["fluid_cells"] / g["fluid_cells"],
             "particles": a["particles"] / g["particles"],
-            "window": f'{a["steps"]:.0f} steps (regular {g["steps"]:.0f})', "ta": ta, "tg": tg,
+            "window": f'to {a["time"]:g} s' if until else f'{a["steps"]:.0f} steps (regular {g["steps"]:.0f})',
+            "steps": f'{a["steps"]:.0f} steps, regular {g["steps"]:.0f}', "ta": ta, "tg": tg,
             "core_us": core_us, "paper_us": paper_us, "per_particle": (ta / a["particles"]) / (tg / g["particles"]),
-            "peak_a": a["peak_mb"], "peak_g": g["peak_mb"], "same_window": a["steps"] == g["steps"]}
+            "peak_a": a["peak_mb"], "peak_g": g["peak_mb"], "same_window": until or a["steps"] == g["steps"]}
     return rows
 
 
@@ -265,64 +274,67 @@ def scale_table(rows):
              "| --- | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"]
     for (scene, level), r in rows.items():
         lines.append(
-            f"| {scene} | 2^-{level} | {r['window']} | {r['ta']:.3f} | {r['tg']:.3f} | {1 / r['time']:.2f}x | "
+            f"| {scene} | 2^-{level} | {r['window'] + (' (' + r['steps'] + ')' if r['window'].startswith('to ') else '')} | {r['ta']:.3f} | {r['tg']:.3f} | {1 / r['time']:.2f}x | "
             f"{100 * r['cells']:.0f}% | {100 * r['particles']:.0f}% | {r['per_particle']:.2f} | {r['core_us']:.1f} | "
             f"{fmt(r['paper_us'], '.1f')} | {fmt(r['core_us'] / r['paper_us'], '.3f')} | {fmt(r['peak_a'], '.0f')} | "
             f"{fmt(r['peak_g'], '.0f')} |")
     return lines
 
 
-# Levels the tier runs only when asked (LIQUID_SCALE_L8=1): their accepted ratios are checked when the run
-# made them and kept, unchecked, when it did not; a bless without them keeps the accepted ones.
-OPTIONAL_LEVELS = (8,)
+# The levels the tier runs unless told otherwise (LIQUID_SCALE_L8=1 adds 8, LIQUID_SCALE_LEVELS picks):
+# an accepted ratio at a level the run was not asked for is kept and not checked.
+DEFAULT_LEVELS = (6, 7)
 
 
 def write_reference(path, entries, note):
-    """Writes the accepted ratios {(scene, level): {window, figures}} in order."""
+    """Writes the accepted ratios {(scene, level, window): {figures}} in order."""
     text = ["# Accepted ratios of the scale tier (ci/bench-scenes --paper-sizes), checked by reports/table1.py.",
-                "# Written by LIQUID_SCALE_BLESS=1 ci/bench-scenes --paper-sizes; a commit that moves them says why.",
-                "# time: adaptive / regular APIC seconds a step; cells, particles: adaptive / regular.", "",
+            "# Written by LIQUID_SCALE_BLESS=1 ci/bench-scenes --paper-sizes; a commit that moves them says why.",
+            "# time: adaptive / regular APIC seconds over the window; cells, particles: adaptive / regular.",
+            "# One entry per scene, level and window: the first steps, or a whole run (LIQUID_SCALE_UNTIL).", "",
             "[tolerance]", "time_rel = 0.3", "share_rel = 0.05"]
-    for (scene, level), e in sorted(entries.items()):
-        text += ["", "[[ratio]]", f'scene = "{scene}"', f"level = {level}", f'window = "{e["window"]}"']
+    for (scene, level, window), e in sorted(entries.items()):
+        text += ["", "[[ratio]]", f'scene = "{scene}"', f"level = {level}", f'window = "{window}"']
         text += [f"{f} = {e[f]:.4g}" for f in GATED]
     pathlib.Path(path).write_text("\n".join(text) + "\n")
     print(f"table1: wrote {path}{note}")
 
 
-def gate(rows, path, bless, bless_new=False):
-    """Compares the ratios with the accepted ones (or writes them); returns the exit status."""
+def gate(rows, path, bless, bless_new=False, levels=None):
+    """Compares the ratios with the accepted ones (or writes them); returns the exit status. `levels`:
+    the levels the run was asked for (default DEFAULT_LEVELS and those it made)."""
+    asked = set(levels or DEFAULT_LEVELS) | {level for (_, level) in rows}
     # A shorter regular window (LIQUID_SCALE_L8_REGULAR_STEPS) is printed, never accepted.
-    measured = {k: {"window": r["window"], **{f: r[f] for f in GATED}} for k, r in rows.items() if r["same_window"]}
-    if bless:
-        kept = {}
-        if pathlib.Path(path).exists():
-            accepted, _ = read_reference(path)
-            kept = {k: e for k, e in accepted.items() if k[1] in OPTIONAL_LEVELS and k not in rows}
-        write_reference(path, measured | kept,
-                        f" (kept the accepted rows this run did not make: {sorted(kept)})" if kept else "")
+    measured = {(scene, level, r["window"]): {f: r[f] for f in GATED} for (scene, level), r in rows.items()
+                if r["same_window"]}
+    accepted, tol = read_reference(path) if pathlib.Path(path).exists() or not bless else ({}, None)
+    if bless:  # replaces the entries of the levels and windows this run made; keeps the others
+        kept = {k: e for k, e in accepted.items() if k not in measured}
+        write_reference(path, {k: {f: e[f] for f in GATED} for k, e in kept.items()} | measured,
+                        f" (kept {len(kept)} accepted entries of other levels or windows)" if kept else "")
         return 0
-    accepted, tol = read_reference(path)
     failures = []
-    for key, entry in accepted.items():
-        if key in rows and rows[key]["window"] != entry["window"]:
-            print(f"table1 gate: {key[0]} 2^-{key[1]}: accepted over {entry['window']}, this run over "
-                  f"{rows[key]['window']}: not comparable, not checked")
+    for (scene, level, window), entry in accepted.items():
+        row = rows.get((scene, level))
+        if row is None and level not in asked:
+            print(f"table1 gate: {scene} 2^-{level}: not run (LIQUID_SCALE_L8=1 or LIQUID_SCALE_LEVELS runs it), "
+                  f"not checked")
             continue
-        if key not in rows and key[1] in OPTIONAL_LEVELS:
-            print(f"table1 gate: {key[0]} 2^-{key[1]}: not run (LIQUID_SCALE_L8=1 runs it), not checked")
+        if row is None:
+            failures.append(f"{path}: {scene} at 2^-{level}: accepted, but this run made no such pair of runs")
             continue
-        if key not in rows:
-            failures.append(f"{path}: {key[0]} at 2^-{key[1]}: accepted, but this run made no such pair of runs")
+        if row["window"] != window:
+            print(f"table1 gate: {scene} 2^-{level}: accepted over '{window}', this run over '{row['window']}': "
+                  f"not comparable, not checked")
             continue
         for f in GATED:
             limit = entry[f] * (1 + (tol["time_rel"] if f == "time" else tol["share_rel"]))
-            now = rows[key][f]
+            now = row[f]
             status = "ok" if now <= limit else "REGRESSION"
-            print(f"table1 gate: {key[0]} 2^-{key[1]} {GATE_HELP[f]}: accepted {entry[f]:.4g}, now {now:.4g}, "
+            print(f"table1 gate: {scene} 2^-{level} {GATE_HELP[f]}: accepted {entry[f]:.4g}, now {now:.4g}, "
                   f"allowed {limit:.4g}: {status}")
             if now > limit:
-                failures.append(f"{key[0]} at 2^-{key[1]}: {GATE_HELP[f]} {now:.4g} > {limit:.4g}")
+                failures.append(f"{scene} at 2^-{level}: {GATE_HELP[f]} {now:.4g} > {limit:.4g}")
     for f in failures:
         print(f"table1 gate: {f}", file=sys.stderr)
     if failures:
@@ -330,8 +342,8 @@ def gate(rows, path, bless, bless_new=False):
     if bless_new:
         new = {k: e for k, e in measured.items() if k not in accepted}
         if new:
-            write_reference(path, {k: {"window": e["window"], **{f: e[f] for f in GATED}} for k, e in accepted.items()}
-                            | new, f" (added {sorted(new)}; the accepted rows unchanged)")
+            write_reference(path, {k: {f: e[f] for f in GATED} for k, e in accepted.items()} | new,
+                            f" (added {sorted(new)}; the accepted entries unchanged)")
         else:
             print(f"table1: every row of this run already has accepted ratios; {path} unchanged")
     return 0
@@ -343,7 +355,15 @@ def main():
     for flag in ("--bless", "--bless-new"):
         if flag in args:
             args.remove(flag)
-    reference = None
+    reference, levels = None, None
+    if "--levels" in args:
+        i = args.index("--levels")
+        try:
+            levels = [int(x) for x in args[i + 1].replace(",", " ").split()]
+        except (IndexError, ValueError):
+            print(f"table1: --levels expects levels such as '6 7', got {args[i + 1:i + 2]}", file=sys.stderr)
+            return 2
+        del args[i:i + 2]
     if "--gate" in args:
         i = args.index("--gate")
         if i + 1 >= len(args):
@@ -416,7 +436,7 @@ def main():
     print(text)
     if reference:
         try:
-            return gate(rows, reference, bless, bless_new)
+            return gate(rows, reference, bless, bless_new, levels)
         except (ValueError, tomllib.TOMLDecodeError, OSError) as e:
             print(f"table1 gate: {e}", file=sys.stderr)
             return 2
