@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """Table 1 of RBF Liquids for our scenes, from the JSON files ci/bench-scenes writes.
 
-Usage: table1.py DIR [--gate REFERENCE.toml [--bless | --bless-new] [--levels "6 7"]]
+Usage: table1.py DIR [--gate REFERENCE.toml [--bless | --bless-new] [--levels "6 7"] [--until T]]
 
 Every DIR/<scene>-<dim>d-L<level>-<method>-r<k>.json is one run (liquid run --json). Per scene,
 dimension and level: the median over repeats of each figure; the adaptive run's fluid cells and
@@ -11,14 +11,16 @@ and the paper's row (3D, 16 cores) with the ratio of core-seconds per particle-s
 paper's. Writes DIR/table1.md and prints it.
 
 With --gate (the scale tier, ci/bench-scenes --paper-sizes): a table of the ratios per scene and
-size (adaptive over regular APIC seconds a step, shares of fluid cells and particles, core-us per
-particle-step beside the paper's row at the same h, peak memory), checked against the accepted
-ratios in REFERENCE.toml: exit 1 naming every ratio that grew past its tolerance; --bless writes
-the file from this run instead; --bless-new checks the accepted ratios and, when they pass, adds
-this run's rows that have none (a first 2^-8 run, a first whole run), leaving the accepted ones as
-they are. Entries are per scene, level and window (the first N steps, or "to T s" for a whole run):
-a run is compared with those of its own window; --levels names the levels the run was asked for
-(default 6 and 7), and entries at other levels are kept and not checked.
+size (adaptive over regular APIC seconds over the window, shares of fluid cells and particles,
+core-us per particle-step beside the paper's row at the same h, peak memory), checked against the
+accepted ratios in REFERENCE.toml. Entries are per scene, level and window: the first N steps, or
+"to T s" for runs to a simulated time (--until T, which ci/bench-scenes passes with
+LIQUID_SCALE_UNTIL; the two runs may then take different numbers of steps, so the time ratio is of
+their total seconds). Exit 1 naming every ratio that grew past its tolerance, an accepted entry at
+a level the run was asked for (--levels, default 6 and 7) that it did not make, or a row of the run
+with no accepted entry for its window. --bless writes this run's entries (keeping those of other
+levels and windows); --bless-new checks the accepted ones and, when they pass, adds this run's rows
+that have none (a first 2^-8 run, a first whole run). Tolerances are kept as the file has them.
 """
 
 import json
@@ -216,6 +218,10 @@ def read_reference(path):
         keys = {"scene", "level", "window"} | set(GATED)
         if set(entry) != keys:
             raise ValueError(f"{path}: [[ratio]] #{k + 1}: keys {sorted(entry)}, expected {sorted(keys)}")
+        if not isinstance(entry["scene"], str) or not isinstance(entry["window"], str) \
+                or not isinstance(entry["level"], int) or isinstance(entry["level"], bool):
+            raise ValueError(f"{path}: [[ratio]] #{k + 1}: scene and window must be strings and level a whole "
+                             f"number, found {entry['scene']!r}, {entry['window']!r}, {entry['level']!r}")
         for f in GATED:
             if not isinstance(entry[f], (int, float)) or not entry[f] > 0 or math.isinf(entry[f]):
                 raise ValueError(f"{path}: [[ratio]] #{k + 1} ({entry['scene']}, {entry['level']}): '{f}' "
@@ -230,29 +236,30 @@ def read_reference(path):
     return accepted, tol
 
 
-def scale_ratios(groups):
-    """Per (scene, level) with both runs: the gated ratios, and what the table prints beside them."""
+def scale_ratios(groups, until=None):
+    """Per (scene, level) with both runs: the gated ratios, and what the table prints beside them.
+    `until`: the runs went to this simulated time (their window), not a number of steps."""
     rows = {}
     for (scene, dim, level), methods in sorted(groups.items()):
         if dim != 3 or "adaptive-rbf" not in methods or "regular-apic" not in methods:
             continue
         a, g = median_run(methods["adaptive-rbf"]), median_run(methods["regular-apic"])
         ta, tg = a["sec"].get("total", float("nan")), g["sec"].get("total", float("nan"))
-        # Over a window of simulated time (LIQUID_SCALE_UNTIL) the two runs may take different numbers
-        # of steps: the gain is the seconds each needs for the whole window, which is the ratio of
-        # seconds a step when the step counts agree.
-        # A window of simulated time: both runs end at the same time, in their own numbers of steps.
-        until = a["steps"] != g["steps"] and abs(a["time"] - g["time"]) <= 1e-9 * max(1.0, a["time"])
+        # To a simulated time the two runs may take different numbers of steps: the gain is then the
+        # seconds each needs for the whole window. Over N steps it is the ratio of seconds a step (also
+        # when the regular run took fewer steps, LIQUID_SCALE_L8_REGULAR_STEPS: printed, not gated).
+        ratio = ta * a["steps"] / (tg * g["steps"]) if until else ta / tg
         core_us = 1e6 * ta * a["threads"] / a["particles"]
         paper = [p for p in PAPER.get(scene, []) if p[1] == f"2^-{level}"]
         paper_us = 1e6 * paper[0][10] * PAPER_CORES / paper[0][4] if paper else float("nan")
         rows[(f"{scene}-3d", level)] = {
-            "time": ta * a["steps"] / (tg * g["steps"]), "cells": a["fluid_cells"] / g["fluid_cells"],
+            "time": ratio, "cells": a["fluid_cells"] / g["fluid_cells"],
             "particles": a["particles"] / g["particles"],
-            "window": f'to {a["time"]:g} s' if until else f'{a["steps"]:.0f} steps (regular {g["steps"]:.0f})',
+            "window": f"to {until:g} s" if until else f'{a["steps"]:.0f} steps (regular {g["steps"]:.0f})',
             "steps": f'{a["steps"]:.0f} steps, regular {g["steps"]:.0f}', "ta": ta, "tg": tg,
             "core_us": core_us, "paper_us": paper_us, "per_particle": (ta / a["particles"]) / (tg / g["particles"]),
-            "peak_a": a["peak_mb"], "peak_g": g["peak_mb"], "same_window": until or a["steps"] == g["steps"]}
+            "peak_a": a["peak_mb"], "peak_g": g["peak_mb"],
+            "same_window": bool(until) or a["steps"] == g["steps"]}
     return rows
 
 
@@ -263,9 +270,10 @@ def fmt(x, spec):
 
 def scale_table(rows):
     lines = ["", "## Scale tier: the gain at the paper's sizes (ci/bench-scenes --paper-sizes)", "",
-             "Adaptive RBF against regular APIC at the same finest h, over the stated window of steps from the "
-             "start. speed-up: regular seconds over adaptive for the whole window (over a window of simulated time "
-             "the two may take different numbers of steps); shares: adaptive over regular; "
+             "Adaptive RBF against regular APIC at the same finest h, over the stated window from the start (a "
+             "number of steps, or a simulated time). speed-up: regular seconds over adaptive, a step's over N "
+             "steps and the whole run's to a time (the two may then take different numbers of steps); shares: "
+             "adaptive over regular; "
              "per particle-step: adaptive's cost over regular's; core-us: total seconds x threads per particle, "
              "beside the paper's row at the same h (16 cores).", "",
              "| scene | h | window | adaptive s/step | regular s/step | speed-up | fluid cells | particles | "
@@ -284,49 +292,53 @@ def scale_table(rows):
 # The levels the tier runs unless told otherwise (LIQUID_SCALE_L8=1 adds 8, LIQUID_SCALE_LEVELS picks):
 # an accepted ratio at a level the run was not asked for is kept and not checked.
 DEFAULT_LEVELS = (6, 7)
+DEFAULT_TOLERANCE = {"time_rel": 0.3, "share_rel": 0.05}
 
 
-def write_reference(path, entries, note):
-    """Writes the accepted ratios {(scene, level, window): {figures}} in order."""
+def write_reference(path, entries, tol, how):
+    """Writes the accepted ratios {(scene, level, window): {figures}} in order, with the tolerances."""
     text = ["# Accepted ratios of the scale tier (ci/bench-scenes --paper-sizes), checked by reports/table1.py.",
-            "# Written by LIQUID_SCALE_BLESS=1 ci/bench-scenes --paper-sizes; a commit that moves them says why.",
-            "# time: adaptive / regular APIC seconds over the window; cells, particles: adaptive / regular.",
-            "# One entry per scene, level and window: the first steps, or a whole run (LIQUID_SCALE_UNTIL).", "",
-            "[tolerance]", "time_rel = 0.3", "share_rel = 0.05"]
+            "# Written by LIQUID_SCALE_BLESS=1 (or =new: added rows) ci/bench-scenes --paper-sizes; a commit that",
+            "# moves them says why. time: adaptive / regular APIC seconds over the window; cells, particles:",
+            "# adaptive / regular. One entry per scene, level and window: the first N steps, or a run to a",
+            "# simulated time (LIQUID_SCALE_UNTIL).", "",
+            "[tolerance]", f"time_rel = {tol['time_rel']}", f"share_rel = {tol['share_rel']}"]
     for (scene, level, window), e in sorted(entries.items()):
         text += ["", "[[ratio]]", f'scene = "{scene}"', f"level = {level}", f'window = "{window}"']
         text += [f"{f} = {e[f]:.4g}" for f in GATED]
     pathlib.Path(path).write_text("\n".join(text) + "\n")
-    print(f"table1: wrote {path}{note}")
+    print(f"table1: wrote {path}: {how}")
 
 
 def gate(rows, path, bless, bless_new=False, levels=None):
     """Compares the ratios with the accepted ones (or writes them); returns the exit status. `levels`:
-    the levels the run was asked for (default DEFAULT_LEVELS and those it made)."""
+    the levels the run was asked for (default DEFAULT_LEVELS, and those it made)."""
     asked = set(levels or DEFAULT_LEVELS) | {level for (_, level) in rows}
-    # A shorter regular window (LIQUID_SCALE_L8_REGULAR_STEPS) is printed, never accepted.
+    # A shorter regular window (LIQUID_SCALE_L8_REGULAR_STEPS) is printed, never accepted or checked.
     measured = {(scene, level, r["window"]): {f: r[f] for f in GATED} for (scene, level), r in rows.items()
                 if r["same_window"]}
-    accepted, tol = read_reference(path) if pathlib.Path(path).exists() or not bless else ({}, None)
+    exists = pathlib.Path(path).exists()
+    accepted, tol = read_reference(path) if exists else ({}, dict(DEFAULT_TOLERANCE))
     if bless:  # replaces the entries of the levels and windows this run made; keeps the others
         kept = {k: e for k, e in accepted.items() if k not in measured}
-        write_reference(path, {k: {f: e[f] for f in GATED} for k, e in kept.items()} | measured,
-                        f" (kept {len(kept)} accepted entries of other levels or windows)" if kept else "")
+        write_reference(path, {k: {f: e[f] for f in GATED} for k, e in kept.items()} | measured, tol,
+                        f"{len(measured)} entries from this run, {len(kept)} kept of other levels or windows")
         return 0
-    failures = []
+    if not exists and not bless_new:
+        raise OSError(f"{path}: no accepted ratios (LIQUID_SCALE_BLESS=1 or =new writes them)")
+    failures, checked = [], 0
     for (scene, level, window), entry in accepted.items():
         row = rows.get((scene, level))
         if row is None and level not in asked:
-            print(f"table1 gate: {scene} 2^-{level}: not run (LIQUID_SCALE_L8=1 or LIQUID_SCALE_LEVELS runs it), "
-                  f"not checked")
+            print(f"table1 gate: {scene} 2^-{level} over '{window}': level not run (LIQUID_SCALE_L8=1 or "
+                  f"LIQUID_SCALE_LEVELS runs it), not checked")
             continue
         if row is None:
             failures.append(f"{path}: {scene} at 2^-{level}: accepted, but this run made no such pair of runs")
             continue
         if row["window"] != window:
-            print(f"table1 gate: {scene} 2^-{level}: accepted over '{window}', this run over '{row['window']}': "
-                  f"not comparable, not checked")
-            continue
+            continue  # another window's entry (the first steps beside a whole run)
+        checked += 1
         for f in GATED:
             limit = entry[f] * (1 + (tol["time_rel"] if f == "time" else tol["share_rel"]))
             now = row[f]
@@ -335,17 +347,21 @@ def gate(rows, path, bless, bless_new=False, levels=None):
                   f"allowed {limit:.4g}: {status}")
             if now > limit:
                 failures.append(f"{scene} at 2^-{level}: {GATE_HELP[f]} {now:.4g} > {limit:.4g}")
+    new = {k: e for k, e in measured.items() if k not in accepted}
+    for (scene, level, window) in sorted(new):
+        message = f"{scene} at 2^-{level} over '{window}': no accepted ratios for this window"
+        if bless_new:
+            print(f"table1 gate: {message}; adding this run's")
+        else:
+            failures.append(f"{message} (LIQUID_SCALE_BLESS=new accepts them once the others pass)")
+    print(f"table1 gate: {checked} pairs of runs checked against {path}")
     for f in failures:
         print(f"table1 gate: {f}", file=sys.stderr)
     if failures:
         return 1
-    if bless_new:
-        new = {k: e for k, e in measured.items() if k not in accepted}
-        if new:
-            write_reference(path, {k: {f: e[f] for f in GATED} for k, e in accepted.items()} | new,
-                            f" (added {sorted(new)}; the accepted entries unchanged)")
-        else:
-            print(f"table1: every row of this run already has accepted ratios; {path} unchanged")
+    if bless_new and new:
+        write_reference(path, {k: {f: e[f] for f in GATED} for k, e in accepted.items()} | new, tol,
+                        f"added {sorted(new)}; the {len(accepted)} accepted entries and the tolerances unchanged")
     return 0
 
 
@@ -362,6 +378,16 @@ def main():
             levels = [int(x) for x in args[i + 1].replace(",", " ").split()]
         except (IndexError, ValueError):
             print(f"table1: --levels expects levels such as '6 7', got {args[i + 1:i + 2]}", file=sys.stderr)
+            return 2
+        del args[i:i + 2]
+    until = None
+    if "--until" in args:
+        i = args.index("--until")
+        try:
+            until = float(args[i + 1])
+            assert until > 0 and math.isfinite(until)
+        except (IndexError, ValueError, AssertionError):
+            print(f"table1: --until expects a positive simulated time, got {args[i + 1:i + 2]}", file=sys.stderr)
             return 2
         del args[i:i + 2]
     if "--gate" in args:
@@ -428,7 +454,7 @@ def main():
                          f"{100 * p[6] / p[10]:.1f} | {1e6 * p[10] / p[4]:.2f} | {1e6 * p[10] / p[2]:.2f} | 16 | 1.00 |")
     lines += phase_bars(groups, folder)
     lines += growth(groups, folder)
-    rows = scale_ratios(groups) if reference else {}
+    rows = scale_ratios(groups, until) if reference else {}
     if reference:
         lines += scale_table(rows)
     text = "\n".join(lines) + "\n"

@@ -166,8 +166,8 @@ void add_study_flags(CLI::App& app, StudyFlags& f) {
       "(default: regular-apic; adaptive-rbf in 3D past level 7)");
   app.add_option("--band", f.band,
                  "flow studies: the adaptive rows keep cells within K face hops of a surface cell at the "
-                 "finest level (1 to 4; default 2, the paper's)")
-      ->check(CLI::Range(1, 4));
+                 "finest level (0 to 16, as the scene key [grid] band; default 2, the paper's)")
+      ->check(CLI::Range(0, 16));
   app.add_option("--seed", f.seed,
                  "sampled problems (the SPH resampling and surface cases): the random draws");
   app.add_option("--particles", f.particles,

@@ -18,8 +18,8 @@ namespace liquid::verification {
 std::string band_note(int band) {
   return fmt::format(
       "adaptive runs: cells within {} face hop{} of a surface cell at the finest level "
-      "(--band; the default and the paper's: 2)",
-      band, band == 1 ? "" : "s");
+      "(--band; the default and the paper's: {}; a reference run keeps the default)",
+      band, band == 1 ? "" : "s", pic::PicOptions<3>{}.band);
 }
 
 std::vector<FlowMethod> chosen_methods(std::span<const FlowMethod> all, const std::vector<std::string>& names,
