@@ -23,6 +23,7 @@ levels and windows); --bless-new checks the accepted ones and, when they pass, a
 that have none (a first 2^-8 run, a first whole run). Tolerances are kept as the file has them.
 """
 
+import argparse
 import json
 import math
 import pathlib
@@ -229,7 +230,7 @@ def read_reference(path):
         key = (entry["scene"], int(entry["level"]), entry["window"])
         if key in accepted:
             raise ValueError(f"{path}: [[ratio]] #{k + 1}: a second entry for {key}")
-        accepted[key] = entry
+        accepted[key] = {f: entry[f] for f in GATED}
     for name in ("time_rel", "share_rel"):
         if not isinstance(tol[name], (int, float)) or not 0 <= tol[name] < 10:
             raise ValueError(f"{path}: tolerance.{name} must be a number in [0, 10), found {tol[name]!r}")
@@ -256,7 +257,8 @@ def scale_ratios(groups, until=None):
             "time": ratio, "cells": a["fluid_cells"] / g["fluid_cells"],
             "particles": a["particles"] / g["particles"],
             "window": f"to {until:g} s" if until else f'{a["steps"]:.0f} steps (regular {g["steps"]:.0f})',
-            "steps": f'{a["steps"]:.0f} steps, regular {g["steps"]:.0f}', "ta": ta, "tg": tg,
+            "shown": f'to {until:g} s ({a["steps"]:.0f} steps, regular {g["steps"]:.0f})' if until
+                     else f'{a["steps"]:.0f} steps (regular {g["steps"]:.0f})', "ta": ta, "tg": tg,
             "core_us": core_us, "paper_us": paper_us, "per_particle": (ta / a["particles"]) / (tg / g["particles"]),
             "peak_a": a["peak_mb"], "peak_g": g["peak_mb"],
             "same_window": bool(until) or a["steps"] == g["steps"]}
@@ -282,7 +284,7 @@ def scale_table(rows):
              "| --- | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"]
     for (scene, level), r in rows.items():
         lines.append(
-            f"| {scene} | 2^-{level} | {r['window'] + (' (' + r['steps'] + ')' if r['window'].startswith('to ') else '')} | {r['ta']:.3f} | {r['tg']:.3f} | {1 / r['time']:.2f}x | "
+            f"| {scene} | 2^-{level} | {r['shown']} | {r['ta']:.3f} | {r['tg']:.3f} | {1 / r['time']:.2f}x | "
             f"{100 * r['cells']:.0f}% | {100 * r['particles']:.0f}% | {r['per_particle']:.2f} | {r['core_us']:.1f} | "
             f"{fmt(r['paper_us'], '.1f')} | {fmt(r['core_us'] / r['paper_us'], '.3f')} | {fmt(r['peak_a'], '.0f')} | "
             f"{fmt(r['peak_g'], '.0f')} |")
@@ -321,7 +323,7 @@ def gate(rows, path, bless, bless_new=False, levels=None):
     accepted, tol = read_reference(path) if exists else ({}, dict(DEFAULT_TOLERANCE))
     if bless:  # replaces the entries of the levels and windows this run made; keeps the others
         kept = {k: e for k, e in accepted.items() if k not in measured}
-        write_reference(path, {k: {f: e[f] for f in GATED} for k, e in kept.items()} | measured, tol,
+        write_reference(path, kept | measured, tol,
                         f"{len(measured)} entries from this run, {len(kept)} kept of other levels or windows")
         return 0
     if not exists and not bless_new:
@@ -360,47 +362,38 @@ def gate(rows, path, bless, bless_new=False, levels=None):
     if failures:
         return 1
     if bless_new and new:
-        write_reference(path, {k: {f: e[f] for f in GATED} for k, e in accepted.items()} | new, tol,
+        write_reference(path, accepted | new, tol,
                         f"added {sorted(new)}; the {len(accepted)} accepted entries and the tolerances unchanged")
     return 0
 
 
+def level_list(text):
+    """--levels' value: whole levels separated by spaces or commas."""
+    return [int(x) for x in text.replace(",", " ").split()]
+
+
+def positive_time(text):
+    """--until's value: a positive, finite simulated time."""
+    t = float(text)
+    if not (t > 0 and math.isfinite(t)):
+        raise ValueError(text)
+    return t
+
+
 def main():
-    args = sys.argv[1:]
-    bless, bless_new = "--bless" in args, "--bless-new" in args
-    for flag in ("--bless", "--bless-new"):
-        if flag in args:
-            args.remove(flag)
-    reference, levels = None, None
-    if "--levels" in args:
-        i = args.index("--levels")
-        try:
-            levels = [int(x) for x in args[i + 1].replace(",", " ").split()]
-        except (IndexError, ValueError):
-            print(f"table1: --levels expects levels such as '6 7', got {args[i + 1:i + 2]}", file=sys.stderr)
-            return 2
-        del args[i:i + 2]
-    until = None
-    if "--until" in args:
-        i = args.index("--until")
-        try:
-            until = float(args[i + 1])
-            assert until > 0 and math.isfinite(until)
-        except (IndexError, ValueError, AssertionError):
-            print(f"table1: --until expects a positive simulated time, got {args[i + 1:i + 2]}", file=sys.stderr)
-            return 2
-        del args[i:i + 2]
-    if "--gate" in args:
-        i = args.index("--gate")
-        if i + 1 >= len(args):
-            print(__doc__, file=sys.stderr)
-            return 2
-        reference = args[i + 1]
-        del args[i:i + 2]
-    if len(args) != 1 or ((bless or bless_new) and reference is None) or (bless and bless_new):
-        print(__doc__, file=sys.stderr)
-        return 2
-    folder = pathlib.Path(args[0])
+    parser = argparse.ArgumentParser(prog="table1.py", description=__doc__.split("\n\n")[0])
+    parser.add_argument("folder")
+    parser.add_argument("--gate", metavar="REFERENCE.toml", dest="reference")
+    blessing = parser.add_mutually_exclusive_group()
+    blessing.add_argument("--bless", action="store_true")
+    blessing.add_argument("--bless-new", action="store_true")
+    parser.add_argument("--levels", type=level_list, help="the levels the run was asked for, such as '6 7'")
+    parser.add_argument("--until", type=positive_time, help="the runs went to this simulated time")
+    args = parser.parse_args()
+    reference = args.reference
+    if (args.bless or args.bless_new) and reference is None:
+        parser.error("--bless and --bless-new need --gate REFERENCE.toml")
+    folder = pathlib.Path(args.folder)
     groups = {}
     for path in sorted(folder.glob("*.json")):
         m = NAME.match(path.stem)
@@ -454,7 +447,7 @@ def main():
                          f"{100 * p[6] / p[10]:.1f} | {1e6 * p[10] / p[4]:.2f} | {1e6 * p[10] / p[2]:.2f} | 16 | 1.00 |")
     lines += phase_bars(groups, folder)
     lines += growth(groups, folder)
-    rows = scale_ratios(groups, until) if reference else {}
+    rows = scale_ratios(groups, args.until) if reference else {}
     if reference:
         lines += scale_table(rows)
     text = "\n".join(lines) + "\n"
@@ -462,7 +455,7 @@ def main():
     print(text)
     if reference:
         try:
-            return gate(rows, reference, bless, bless_new, levels)
+            return gate(rows, reference, args.bless, args.bless_new, args.levels)
         except (ValueError, tomllib.TOMLDecodeError, OSError) as e:
             print(f"table1 gate: {e}", file=sys.stderr)
             return 2

@@ -33,6 +33,7 @@
 #include <cstdio>
 #include <limits>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -116,10 +117,10 @@ Shape measure(const pic::AdaptivePic<Dim>& sim) {
 }
 
 template <int Dim>
-Run run_method(const FlowMethod& m, int level, int band) {
+Run run_method(const FlowMethod& m, int level, std::optional<int> band) {
   pic::PicOptions<Dim> o;
   o.adaptive = m.adaptive;
-  if (m.adaptive) o.band = band;
+  if (band) o.band = *band;  // a regular run has no band
   o.transfer = m.transfer;
   o.finest_level = level;
   o.coarse_level = m.adaptive ? std::max(1, level - 3) : level;
@@ -193,8 +194,7 @@ CaseResult run(const CaseOptions& options) {
                         : (affordable ? kMethods[1] : kMethods[0]);
   // The reference keeps the default band whatever --band sets, so that rows of any band are measured
   // against the same run.
-  const int band = options.band.value_or(pic::PicOptions<Dim>{}.band);
-  const Run reference = run_method<Dim>(ref_method, ref_level, pic::PicOptions<Dim>{}.band);
+  const Run reference = run_method<Dim>(ref_method, ref_level, std::nullopt);
   result.notes.push_back(
       fmt::format("reference: {} at finest level {}, {:.1f} s, {:.0f} particles{}", ref_method.name,
                   ref_level, reference.seconds, reference.particles,
@@ -202,7 +202,7 @@ CaseResult run(const CaseOptions& options) {
                       ? ""
                       : " (the default past level 7 in 3D: regular APIC there takes hours; "
                         "rows of the reference's own kind are favoured, see --reference-method)"));
-  if (options.band) result.notes.push_back(band_note(band));
+  if (options.band) result.notes.push_back(band_note(*options.band));
   Table table(fmt::format("dam break ({}D): distance from the reference (front and surface heights, in "
                           "column heights) against seconds to 0.3 s",
                           Dim),
@@ -213,7 +213,7 @@ CaseResult run(const CaseOptions& options) {
   for (const FlowMethod& m : methods) {
     std::vector<double> errors, seconds, hs;
     for (int level : levels) {
-      const Run r = run_method<Dim>(m, level, band);
+      const Run r = run_method<Dim>(m, level, options.band);
       const Distance d = distance(r, reference);
       const double e = d.measure();
       fmt::print("  {} L{}: distance from the reference {:.3f} (front {:.3f}, profile {:.3f}) in {:.2f} s\n",
