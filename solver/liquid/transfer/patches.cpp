@@ -138,6 +138,29 @@ UniformPatches<Dim>::UniformPatches(const tree::CellGraph<Dim>& graph, std::span
     cells_.push_back(c);
     blocks_.insert(blocks_.end(), blocks.begin() + i * block, blocks.begin() + (i + 1) * block);
   }
+  // Each cell of the blocks' side faces, found once (a cell lies in up to 3^Dim blocks): per side
+  // 2k + (0 lower, 1 upper), the face and how many faces the side has (one inside a patch).
+  std::vector<std::int32_t> at(graph.cell_capacity(), -1);
+  std::vector<tree::CellId> members;
+  for (tree::CellId q : blocks_)
+    if (q != tree::no_cell && at[q] < 0)
+      at[q] = static_cast<std::int32_t>(members.size()), members.push_back(q);
+  constexpr int n_sides = 2 * Dim;
+  std::vector<tree::FaceId> side_face(members.size() * n_sides, tree::no_face);
+  std::vector<std::uint8_t> side_count(members.size() * n_sides, 0);
+  parallel_for(
+      static_cast<long>(members.size()),
+      [&](long i) {
+        const tree::CellId q = members[i];
+        for (tree::FaceId f : graph.faces(q)) {
+          const tree::GraphFace& g = graph.face(f);
+          const int side = 2 * g.axis + (g.cell[0] == q ? 1 : 0);  // q below the face: its upper side
+          side_face[i * n_sides + side] = f;
+          side_count[i * n_sides + side] =
+              static_cast<std::uint8_t>(std::min(side_count[i * n_sides + side] + 1, 255));
+        }
+      },
+      512);
   faces_table_.assign(cells_.size() * Dim * axis_faces, tree::no_face);
   parallel_for(
       n_cells(),
@@ -147,22 +170,18 @@ UniformPatches<Dim>::UniformPatches(const tree::CellGraph<Dim>& graph, std::span
             if (o[k] != 0) return;
             const tree::CellId q = blocks_[s * block + block_index<Dim>(o)];
             if (q == tree::no_cell) return;
+            const long m = static_cast<long>(at[q]) * n_sides;
             for (int side = 0; side < 2; ++side) {
-              int found = 0;
-              tree::FaceId face = tree::no_face;
-              graph.for_each_side_face(q, k, side ? 1 : -1, [&](const tree::SideFace& sf) {
-                face = sf.face;
-                ++found;
-              });
+              const int found = side_count[m + 2 * k + side];
               LIQUID_VERIFY(found == 1, "UniformPatches: cell {} has {} faces on side {}{} inside a patch", q,
                             found, side ? '+' : '-', k);
               IVec<Dim> oo = o;
               oo[k] = side;
-              faces_table_[(s * Dim + k) * axis_faces + face_index<Dim>(k, oo)] = face;
+              faces_table_[(s * Dim + k) * axis_faces + face_index<Dim>(k, oo)] = side_face[m + 2 * k + side];
             }
           });
       },
-      64);
+      256);
   face_.assign(graph.face_capacity(), 0);
   for (tree::CellId c : cells_)
     for (tree::FaceId f : graph.faces(c)) {
@@ -263,7 +282,8 @@ void UniformPatches<Dim>::check_inputs(const particles::Particles<Dim>& particle
 template <int Dim>
 void UniformPatches<Dim>::gather_face(long i, const particles::Particles<Dim>& particles,
                                       const particles::CellBins& bins, std::span<const double> affine,
-                                      FaceValues& out, TransferReport& r) const {
+                                      FaceValues& out, TransferReport& r, double sum, double mass,
+                                      bool outside_only) const {
   const tree::CellGraph<Dim>& graph = *graph_;
   const tree::FaceId f = faces_[i];
   const tree::GraphFace& g = graph.face(f);
@@ -280,8 +300,8 @@ void UniformPatches<Dim>::gather_face(long i, const particles::Particles<Dim>& p
   const Vec<Dim> xf = graph.face_centre(f);
   const Vec<Dim> h = graph.cell_size(ref);
   const tree::CellId* blk = blocks_.data() + static_cast<long>(slot_[ref]) * block;
-  double sum = 0.0, mass = 0.0;
   for_each_hat_cell<Dim>(k, upper, blk, [&](tree::CellId q) {
+    if (outside_only && cell(q)) return;  // the scatter brought this cell's particles
     const IVec<Dim>& aq = graph.address(q);
     const Vec<Dim> lo = graph.box(q).lo;
     for (std::int32_t p : bins.of(q)) {
@@ -315,7 +335,7 @@ TransferReport UniformPatches<Dim>::to_faces_gather(const particles::Particles<D
   TransferReport total;
   parallel_for(
       n_faces(), [] { return TransferReport{}; },
-      [&](TransferReport& r, long i) { gather_face(i, particles, bins, affine, out, r); },
+      [&](TransferReport& r, long i) { gather_face(i, particles, bins, affine, out, r, 0.0, 0.0, false); },
       [&](TransferReport& r) { total += r; }, 256);
   total.max_degree_used = 1;
   return total;
@@ -354,7 +374,7 @@ TransferReport UniformPatches<Dim>::to_faces(const particles::Particles<Dim>& pa
                   IVec<Dim> o = st.off;
                   for (int j = 0; j < Dim; ++j) o[j] += (corner >> j) & 1;
                   const tree::FaceId f = table[face_index<Dim>(k, o)];
-                  if (f == tree::no_face || face_[f] != 1) continue;  // past a wall, or gathered
+                  if (f == tree::no_face || face_[f] == 0) continue;  // past a wall, or not a patch face
                   const double w = st.weight(corner);
                   if (w == 0.0) continue;
                   double value = particles.v[p][k];
@@ -379,7 +399,8 @@ TransferReport UniformPatches<Dim>::to_faces(const particles::Particles<Dim>& pa
       n_faces(), [] { return TransferReport{}; },
       [&](TransferReport& r, long i) {
         const tree::FaceId f = faces_[i];
-        if (face_[f] == 2) return gather_face(i, particles, bins, affine, out, r);
+        // A rim face adds the particles of its hat's cells outside the patches to the scattered sums.
+        if (face_[f] == 2) return gather_face(i, particles, bins, affine, out, r, acc[f][0], acc[f][1], true);
         store_mean(out, f, acc[f][0], acc[f][1], r);
       },
       [&](TransferReport& r) { total += r; }, 1024);

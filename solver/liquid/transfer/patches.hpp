@@ -54,15 +54,15 @@ class UniformPatches {
   /// at patch faces only (`out` must be sized for the graph); other faces are left as they are.
   /// A scatter: each patch cell's particles add to the faces of their stencils, in slabs two cells
   /// thick along the last axis (per level) that run in parallel when two apart, so a face's sum has
-  /// a fixed order on any thread count. The faces whose hat also reaches particles of cells that are
-  /// not patch cells (the patches' rims) are gathered as to_faces_gather does.
+  /// a fixed order on any thread count. The faces whose hat also reaches cells that are not patch
+  /// cells (the patches' rims) then gather those cells' particles, as to_faces_gather does.
   TransferReport to_faces(const particles::Particles<Dim>& particles, const particles::CellBins& bins,
                           std::span<const double> affine, FaceValues& out) const;
   /// The same by the definition: every patch face gathers the particles of the 2 x 3^(Dim-1) cells
   /// its hat reaches. Equal to to_faces up to the order of each face's sum.
   TransferReport to_faces_gather(const particles::Particles<Dim>& particles, const particles::CellBins& bins,
                                  std::span<const double> affine, FaceValues& out) const;
-  /// Patch faces on the patches' rims (gathered by to_faces); the others are scattered.
+  /// Patch faces on the patches' rims (to_faces gathers their hats' particles outside the patches).
   long n_rim_faces() const { return n_rim_; }
 
  private:
@@ -71,7 +71,7 @@ class UniformPatches {
   std::vector<tree::CellId> cells_;
   std::vector<tree::CellId> blocks_;       // per patch cell: its 3^Dim block (no_cell outside the domain)
   std::vector<tree::FaceId> faces_table_;  // per patch cell: Dim x axis_faces faces (no_face outside)
-  std::vector<std::uint8_t> face_;  // per face id: 0 not a patch face, 1 scattered, 2 on a rim (gathered)
+  std::vector<std::uint8_t> face_;         // per face id: 0 not a patch face, 1 scattered, 2 on a rim (both)
   std::vector<tree::FaceId> faces_;
   long n_rim_ = 0;
   // The scatter's groups: patch cells (slots) of one level and one slab two cells thick along the
@@ -80,9 +80,11 @@ class UniformPatches {
   std::array<std::vector<std::pair<long, long>>, 2> colours_;
   void check_inputs(const particles::Particles<Dim>& particles, const particles::CellBins& bins,
                     std::span<const double> affine, const FaceValues& out) const;
-  /// Gathers face faces_[i] into out (the definition); counts into r.
+  /// Gathers face faces_[i] into out (the definition), starting from the sums (sum, mass); with
+  /// `outside_only`, from the hat's cells that are not patch cells only. Counts into r.
   void gather_face(long i, const particles::Particles<Dim>& particles, const particles::CellBins& bins,
-                   std::span<const double> affine, FaceValues& out, TransferReport& r) const;
+                   std::span<const double> affine, FaceValues& out, TransferReport& r, double sum,
+                   double mass, bool outside_only) const;
 };
 
 /// APIC's D_k at x in cell c: sum over x's multilinear axis-k stencil in the lattice of c's level of
