@@ -99,22 +99,27 @@ double clamp_to(double v, double lo, double hi, bool clamp, TransferReport& r) {
   return v;
 }
 
-/// Keeps the `cap` nodes nearest to `at` (ties kept in their order), with their values.
+/// Keeps the `cap` nodes nearest to `at` (of equal distances, the earlier ones), with their values, in
+/// their order. A selection by (distance, position), a total order, so the nodes kept are those of a
+/// stable sort by distance without sorting them all.
 template <int Dim>
 void keep_nearest(std::vector<Vec<Dim>>& nodes, std::vector<double>& values, const Vec<Dim>& at, int cap) {
   if (cap <= 0 || static_cast<int>(nodes.size()) <= cap) return;
-  std::vector<int> order(nodes.size());
-  for (std::size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int>(i);
-  std::stable_sort(order.begin(), order.end(), [&](int a, int b) {
-    return (nodes[a] - at).squaredNorm() < (nodes[b] - at).squaredNorm();
-  });
-  order.resize(cap);
-  std::sort(order.begin(), order.end());
-  std::vector<Vec<Dim>> n2;
-  std::vector<double> v2;
-  for (int i : order) n2.push_back(nodes[i]), v2.push_back(values[i]);
-  nodes.swap(n2);
-  values.swap(v2);
+  thread_local std::vector<std::pair<double, int>> order;
+  order.resize(nodes.size());
+  for (std::size_t i = 0; i < order.size(); ++i)
+    order[i] = {(nodes[i] - at).squaredNorm(), static_cast<int>(i)};
+  std::nth_element(order.begin(), order.begin() + (cap - 1), order.end());
+  std::sort(
+      order.begin(), order.begin() + cap,
+      [](const std::pair<double, int>& a, const std::pair<double, int>& b) { return a.second < b.second; });
+  for (int j = 0; j < cap; ++j) {
+    const int i = order[j].second;  // i >= j: the kept positions rise
+    nodes[j] = nodes[i];
+    values[j] = values[i];
+  }
+  nodes.resize(cap);
+  values.resize(cap);
 }
 
 template <int Dim>
