@@ -118,13 +118,6 @@ LinearStencil<Dim>::LinearStencil(const RegularLattice<Dim>& lattice, int k, con
 }
 
 template <int Dim>
-double multilinear_weight(const Vec<Dim>& t, int corner) {
-  double w = 1.0;
-  for (int j = 0; j < Dim; ++j) w *= (corner >> j) & 1 ? t[j] : 1.0 - t[j];
-  return w;
-}
-
-template <int Dim>
 double LinearStencil<Dim>::weight(int corner) const {
   return multilinear_weight<Dim>(t, corner);
 }
@@ -132,23 +125,6 @@ double LinearStencil<Dim>::weight(int corner) const {
 template <int Dim>
 Vec<Dim> LinearStencil<Dim>::gradient(int corner, const Vec<Dim>& h) const {
   return multilinear_gradient<Dim>(t, clamped, corner, h);
-}
-
-template <int Dim>
-Vec<Dim> multilinear_gradient(const Vec<Dim>& t, const std::array<bool, Dim>& clamped, int corner,
-                              const Vec<Dim>& h) {
-  Vec<Dim> g;
-  for (int j = 0; j < Dim; ++j) {
-    if (clamped[j]) {
-      g[j] = 0.0;
-      continue;
-    }
-    double w = ((corner >> j) & 1 ? 1.0 : -1.0) / h[j];
-    for (int i = 0; i < Dim; ++i)
-      if (i != j) w *= (corner >> i) & 1 ? t[i] : 1.0 - t[i];
-    g[j] = w;
-  }
-  return g;
 }
 
 namespace {

@@ -68,12 +68,30 @@ class RegularLattice {
 };
 
 /// Weight of corner `corner` (bit j: +1 along axis j) of a multilinear stencil with fractions t.
+/// Defined here so that the per-particle loops of every transfer inline it.
 template <int Dim>
-double multilinear_weight(const Vec<Dim>& t, int corner);
+double multilinear_weight(const Vec<Dim>& t, int corner) {
+  double w = 1.0;
+  for (int j = 0; j < Dim; ++j) w *= (corner >> j) & 1 ? t[j] : 1.0 - t[j];
+  return w;
+}
 /// Its gradient on a lattice of spacing h; 0 along the clamped axes.
 template <int Dim>
 Vec<Dim> multilinear_gradient(const Vec<Dim>& t, const std::array<bool, Dim>& clamped, int corner,
-                              const Vec<Dim>& h);
+                              const Vec<Dim>& h) {
+  Vec<Dim> g;
+  for (int j = 0; j < Dim; ++j) {
+    if (clamped[j]) {
+      g[j] = 0.0;
+      continue;
+    }
+    double w = ((corner >> j) & 1 ? 1.0 : -1.0) / h[j];
+    for (int i = 0; i < Dim; ++i)
+      if (i != j) w *= (corner >> i) & 1 ? t[i] : 1.0 - t[i];
+    g[j] = w;
+  }
+  return g;
+}
 
 /// The multilinear stencil of a point for component k: base lattice address and fractions.
 template <int Dim>

@@ -344,6 +344,39 @@ class CellGraph {
   std::uint32_t merge_round_ = 0;
 };
 
+// Geometry, defined here so that the per-particle and per-face loops inline it.
+template <int Dim>
+inline Box<Dim> CellGraph<Dim>::box(CellId c) const {
+  const CellData& cell = cells_[c];
+  const Vec<Dim>& s = level_size_[cell.level];
+  Box<Dim> b;
+  for (int d = 0; d < Dim; ++d) {
+    b.lo[d] = domain_.lo[d] + static_cast<double>(cell.address[d]) * s[d];
+    b.hi[d] = domain_.lo[d] + static_cast<double>(cell.address[d] + 1) * s[d];
+  }
+  return b;
+}
+
+template <int Dim>
+inline Vec<Dim> CellGraph<Dim>::centre(CellId c) const {
+  const CellData& cell = cells_[c];
+  const Vec<Dim>& s = level_size_[cell.level];
+  Vec<Dim> x;
+  for (int d = 0; d < Dim; ++d) x[d] = domain_.lo[d] + (static_cast<double>(cell.address[d]) + 0.5) * s[d];
+  return x;
+}
+
+template <int Dim>
+inline Vec<Dim> CellGraph<Dim>::face_centre(FaceId f) const {
+  const GraphFace& g = faces_[f];
+  const int fine = g.side_level[0] >= g.side_level[1] ? 0 : 1;
+  const CellId c = g.cell[fine];
+  Vec<Dim> x = centre(c);
+  const Box<Dim> b = box(c);
+  x[g.axis] = fine == 0 ? b.hi[g.axis] : b.lo[g.axis];
+  return x;
+}
+
 template <int Dim>
 template <class Fn>
 void CellGraph<Dim>::for_each_side_face(CellId c, int axis, int dir, Fn&& fn) const {
