@@ -15,10 +15,12 @@ namespace liquid::transfer {
 // over the axes: `holds` (it has a known face of that axis) and `near` (it or a face neighbour
 // does). A sweep over the cells updates `near`; a sweep over the faces lists the unknown faces whose
 // cells' `near` has their axis, in face-id order (which keeps the means' reads close together).
-// Each sweep reads a few bytes per cell or face, so it costs little beside the means, and nothing
-// in a layer runs on one thread but the commit of the values. The values are those of the plain
-// Jacobi sweep; each mean's sum runs over the known faces in a fixed order, so the result does not
-// depend on the thread count.
+// Each sweep reads a few bytes per cell or face, so it costs little beside the means; only the
+// listing (a pass over the face flags) and the commit of the values run on one thread. A layer so
+// costs O(cells + faces) rather than O(the faces it fills): cheaper at the default four layers, where
+// the band the layers fill is a large share of the tree (docs/findings/table1-scale.md), dearer with
+// many layers over a wide air region. The values are those of the plain Jacobi sweep; each mean's
+// sum runs over the known faces in a fixed order, so the result does not depend on the thread count.
 
 template <int Dim>
 ExtrapolationReport extrapolate_faces(const tree::CellGraph<Dim>& graph, int layers, std::span<double> value,

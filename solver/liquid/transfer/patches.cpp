@@ -67,9 +67,9 @@ struct Local {
   }
 };
 
-/// A thread's buffers for tent_to_faces: the face's cells, one cell's ring, the counts.
+/// A thread's buffers for tent_to_faces: the face's cells, the counts.
 struct TentScratch {
-  std::vector<tree::CellId> cells, ring;
+  std::vector<tree::CellId> cells;
   TransferReport report;
 };
 
@@ -423,18 +423,27 @@ TransferReport tent_to_faces(const tree::CellGraph<Dim>& graph, const particles:
         const Vec<Dim> xf = graph.face_centre(f);
         tree::CellId fine = g.side_level[0] >= g.side_level[1] ? g.cell[0] : g.cell[1];
         const Vec<Dim> h = graph.cell_size(fine);
+        // The face's cells and their face neighbours, once each, in id order; of those, the cells
+        // whose box meets the inside of the tent's support (the others hold no weight).
         std::vector<tree::CellId>& cells = st.cells;
-        std::vector<tree::CellId>& ring = st.ring;
         cells.clear();
         for (tree::CellId c : g.cell) {
           if (c == tree::no_cell) continue;
-          graph.k_ring(c, 1, ring);
-          cells.insert(cells.end(), ring.begin(), ring.end());
+          cells.push_back(c);
+          for (tree::FaceId e : graph.faces(c)) {
+            const tree::GraphFace& ge = graph.face(e);
+            const tree::CellId o = ge.cell[0] == c ? ge.cell[1] : ge.cell[0];
+            if (o != tree::no_cell) cells.push_back(o);
+          }
         }
         std::sort(cells.begin(), cells.end());
         cells.erase(std::unique(cells.begin(), cells.end()), cells.end());
         double sum = 0.0, mass = 0.0;
-        for (tree::CellId q : cells)
+        for (tree::CellId q : cells) {
+          const Box<Dim> b = graph.box(q);
+          bool meets = true;
+          for (int j = 0; j < Dim; ++j) meets = meets && b.lo[j] < xf[j] + h[j] && b.hi[j] > xf[j] - h[j];
+          if (!meets) continue;
           for (std::int32_t p : bins.of(q)) {
             const Vec<Dim>& xp = particles.x[p];
             double w = 1.0;
@@ -446,6 +455,7 @@ TransferReport tent_to_faces(const tree::CellGraph<Dim>& graph, const particles:
             sum += w * value;
             mass += w;
           }
+        }
         ++st.report.targets;
         if (mass > 0.0) {
           out.value[f] = sum / mass, out.known[f] = 1, out.weight[f] = mass;

@@ -435,8 +435,6 @@ Eigen::Vector3d face_angular_momentum(const tree::CellGraph<Dim>& graph, const F
 
 #define LIQUID_REGULAR(D)                                                                                  \
   template class RegularLattice<D>;                                                                        \
-  template double multilinear_weight<D>(const Vec<D>&, int);                                               \
-  template Vec<D> multilinear_gradient<D>(const Vec<D>&, const std::array<bool, D>&, int, const Vec<D>&);  \
   template struct LinearStencil<D>;                                                                        \
   template TransferReport linear_to_faces<D>(const tree::CellGraph<D>&, const RegularLattice<D>&,          \
                                              const particles::Particles<D>&, const particles::CellBins&,   \
