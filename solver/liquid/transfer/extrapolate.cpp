@@ -5,6 +5,7 @@
 
 #include "liquid/core/error.hpp"
 #include "liquid/core/parallel.hpp"
+#include "liquid/transfer/face_stencil.hpp"
 #include "liquid/transfer/regular.hpp"
 
 namespace liquid::transfer {
@@ -92,19 +93,7 @@ ExtrapolationReport extrapolate_faces(const tree::CellGraph<Dim>& graph, int lay
           const tree::FaceId f = candidates[i];
           const int axis = graph.face(f).axis;
           const auto want = static_cast<std::uint8_t>(1u << axis);
-          // The face's cells and their face neighbours, sorted, once each.
-          s.cells.clear();
-          for (tree::CellId c : graph.face(f).cell) {
-            if (c == tree::no_cell) continue;
-            s.cells.push_back(c);
-            for (tree::FaceId g : graph.faces(c)) {
-              const tree::GraphFace& gf = graph.face(g);
-              const tree::CellId o = gf.cell[0] == c ? gf.cell[1] : gf.cell[0];
-              if (o != tree::no_cell) s.cells.push_back(o);
-            }
-          }
-          std::sort(s.cells.begin(), s.cells.end());
-          s.cells.erase(std::unique(s.cells.begin(), s.cells.end()), s.cells.end());
+          face_neighbourhood<Dim>(graph, f, s.cells);
           // Each face once: a face is counted from the lower-id cell holding it among s.cells.
           double sum = 0.0;
           long n = 0;

@@ -2,6 +2,7 @@
 // The face stencil of the face -> point transfers, shared by faces_to_points and FaceVelocityField:
 // per axis k, the axis-k faces of the cells within `rings` face hops of a cell.
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <span>
@@ -26,6 +27,24 @@ template <int Dim>
 void gather_face_stencil(const tree::CellGraph<Dim>& graph, tree::CellId c, int rings,
                          std::span<const double> u, std::span<const std::uint8_t> known,
                          FaceStencil<Dim>& out);
+
+/// The cells of face f and their face neighbours (the 1-rings of its cells), each once, in ascending
+/// id: the neighbourhood the extrapolation and the tents read.
+template <int Dim>
+void face_neighbourhood(const tree::CellGraph<Dim>& graph, tree::FaceId f, std::vector<tree::CellId>& out) {
+  out.clear();
+  for (tree::CellId c : graph.face(f).cell) {
+    if (c == tree::no_cell) continue;
+    out.push_back(c);
+    for (tree::FaceId e : graph.faces(c)) {
+      const tree::GraphFace& g = graph.face(e);
+      const tree::CellId o = g.cell[0] == c ? g.cell[1] : g.cell[0];
+      if (o != tree::no_cell) out.push_back(o);
+    }
+  }
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+}
 
 /// The RBF interpolant of `nodes` (one axis of cell c's stencil) fitted to `values`: through
 /// `cache` when given (shared factors, the values taken in its node order), else factorised for

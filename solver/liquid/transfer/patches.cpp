@@ -8,6 +8,7 @@
 
 #include "liquid/core/error.hpp"
 #include "liquid/core/parallel.hpp"
+#include "liquid/transfer/face_stencil.hpp"
 #include "liquid/transfer/regular.hpp"
 
 namespace liquid::transfer {
@@ -426,18 +427,7 @@ TransferReport tent_to_faces(const tree::CellGraph<Dim>& graph, const particles:
         // The face's cells and their face neighbours, once each, in id order; of those, the cells
         // whose box meets the inside of the tent's support (the others hold no weight).
         std::vector<tree::CellId>& cells = st.cells;
-        cells.clear();
-        for (tree::CellId c : g.cell) {
-          if (c == tree::no_cell) continue;
-          cells.push_back(c);
-          for (tree::FaceId e : graph.faces(c)) {
-            const tree::GraphFace& ge = graph.face(e);
-            const tree::CellId o = ge.cell[0] == c ? ge.cell[1] : ge.cell[0];
-            if (o != tree::no_cell) cells.push_back(o);
-          }
-        }
-        std::sort(cells.begin(), cells.end());
-        cells.erase(std::unique(cells.begin(), cells.end()), cells.end());
+        face_neighbourhood<Dim>(graph, f, cells);
         double sum = 0.0, mass = 0.0;
         for (tree::CellId q : cells) {
           const Box<Dim> b = graph.box(q);
