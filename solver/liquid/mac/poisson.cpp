@@ -112,40 +112,65 @@ std::vector<Row> laplacian_rows(const tree::CellGraph<Dim>& graph, const Poisson
 
 /// The sparse matrix from the rows: the pinned unknown's column moves to the right-hand side (the
 /// rest is a Laplacian with one Dirichlet node, its FD part symmetric), and a zero-mean system
-/// gets a multiplier column and a last row asking for zero volume-weighted mean.
+/// gets a multiplier column and a last row asking for zero volume-weighted mean. The rows go
+/// straight into compressed row storage: each row's entries sorted by column, the entries of one
+/// column summed in the order the row lists them (the sums setFromTriplets forms, without its
+/// column-major copy and transposition). `rows` is consumed.
 template <int Dim>
-void fill_matrix(const tree::CellGraph<Dim>& graph, const std::vector<Row>& rows, PoissonSystem<Dim>& sys) {
+void fill_matrix(const tree::CellGraph<Dim>& graph, std::vector<Row>& rows, PoissonSystem<Dim>& sys) {
   const long n = sys.n_unknowns();
   const long size = n + (sys.bordered ? 1 : 0);
-  std::vector<Eigen::Triplet<double>> triplets;
-  std::size_t n_entries = 0;
-  for (const Row& r : rows) n_entries += r.entries.size();
-  triplets.reserve(n_entries + (sys.bordered ? 2 * n : 0));
   sys.b.resize(size);
   const int pinned_dof = sys.pinned == tree::no_cell ? -1 : sys.layout.dof_of_cell[sys.pinned];
   const double pinned_value = pinned_dof < 0 ? 0.0 : rows[pinned_dof].rhs;
-  for (long i = 0; i < n; ++i) {
-    sys.b[i] = rows[i].rhs;
-    for (const auto& [j, v] : rows[i].entries) {
-      if (j == pinned_dof && i != pinned_dof)
-        sys.b[i] -= v * pinned_value;
+  // Per row, in parallel: the pinned column to the right-hand side, then the entries sorted by
+  // column (stable, so that a column's values keep their order) and each column's values summed.
+  parallel_for(n, [&](long i) {
+    Row& row = rows[i];
+    sys.b[i] = row.rhs;
+    auto& e = row.entries;
+    std::size_t kept = 0;
+    for (std::size_t k = 0; k < e.size(); ++k) {
+      if (e[k].first == pinned_dof && i != pinned_dof)
+        sys.b[i] -= e[k].second * pinned_value;
       else
-        triplets.emplace_back(i, j, v);
+        e[kept++] = e[k];
     }
-  }
+    e.resize(kept);
+    std::stable_sort(e.begin(), e.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+    std::size_t out = 0;
+    for (std::size_t k = 0; k < e.size(); ++k) {
+      if (out > 0 && e[out - 1].first == e[k].first)
+        e[out - 1].second += e[k].second;
+      else
+        e[out++] = e[k];
+    }
+    e.resize(out);
+  });
+  std::vector<int> outer(size + 1, 0);
+  for (long i = 0; i < n; ++i)
+    outer[i + 1] = outer[i] + static_cast<int>(rows[i].entries.size()) + (sys.bordered ? 1 : 0);
+  if (sys.bordered) outer[n + 1] = outer[n] + static_cast<int>(n);
+  std::vector<int> inner(outer[size]);
+  std::vector<double> value(outer[size]);
+  parallel_for(n, [&](long i) {
+    int at = outer[i];
+    for (const auto& [j, v] : rows[i].entries) inner[at] = j, value[at++] = v;
+    if (sys.bordered) inner[at] = static_cast<int>(n), value[at] = 1.0;
+  });
   if (sys.bordered) {
     const double h_min = graph.cell_size(sys.layout.cell_of_dof.front()).minCoeff();
     double volume = 0.0;
     for (tree::CellId c : sys.layout.cell_of_dof) volume += graph.volume(c);
     const double scale = 1.0 / (h_min * h_min);
     for (long i = 0; i < n; ++i) {
-      triplets.emplace_back(i, n, 1.0);
-      triplets.emplace_back(n, i, scale * graph.volume(sys.layout.cell_of_dof[i]) / volume);
+      inner[outer[n] + i] = static_cast<int>(i);
+      value[outer[n] + i] = scale * graph.volume(sys.layout.cell_of_dof[i]) / volume;
     }
     sys.b[n] = 0.0;
   }
-  sys.A.resize(size, size);
-  sys.A.setFromTriplets(triplets.begin(), triplets.end());
+  sys.A = Eigen::Map<const linalg::SparseMatrix>(size, size, outer[size], outer.data(), inner.data(),
+                                                 value.data());
   for (long i = 0; i < size; ++i)
     LIQUID_VERIFY(std::isfinite(sys.b[i]),
                   "the Poisson right-hand side is {} in the row of unknown {} (cell {}): check the boundary "

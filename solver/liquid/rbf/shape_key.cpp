@@ -8,9 +8,9 @@
 
 namespace liquid::rbf {
 
-std::size_t ShapeKeyHash::operator()(const ShapeKey& k) const {
+std::size_t ShapeKeyHash::of(std::span<const std::int64_t> words) {
   std::uint64_t h = 0x9E3779B97F4A7C15ull;
-  for (std::int64_t w : k.words) {
+  for (std::int64_t w : words) {
     h ^= static_cast<std::uint64_t>(w) + 0x9E3779B97F4A7C15ull + (h << 6) + (h >> 2);
     h *= 0xBF58476D1CE4E5B9ull;
   }
@@ -44,6 +44,7 @@ ShapeKey shape_key(std::span<const Vec<Dim>> nodes, const Vec<Dim>& at, double h
       key.words.push_back(static_cast<std::int64_t>(word));
     }
   }
+  key.hash = ShapeKeyHash::of(key.words);
   return key;
 }
 

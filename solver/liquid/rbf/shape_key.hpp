@@ -26,12 +26,14 @@ namespace liquid::rbf {
 
 struct ShapeKey {
   std::vector<std::int64_t> words;  ///< empty: no key (an offset off the quantum)
+  std::size_t hash = 0;             ///< of the words, set once by shape_key (a lookup uses it up to 3 times)
   bool empty() const { return words.empty(); }
-  bool operator==(const ShapeKey& o) const { return words == o.words; }
+  bool operator==(const ShapeKey& o) const { return hash == o.hash && words == o.words; }
 };
 
 struct ShapeKeyHash {
-  std::size_t operator()(const ShapeKey& k) const;
+  std::size_t operator()(const ShapeKey& k) const { return k.hash; }
+  static std::size_t of(std::span<const std::int64_t> words);
 };
 
 /// The key of `nodes` (in their order) seen from `at` in units of `h`, on `quantum`; an empty key

@@ -171,14 +171,15 @@ UniformPatches<Dim>::UniformPatches(const tree::CellGraph<Dim>& graph, std::span
             if (o[k] != 0) return;
             const tree::CellId q = blocks_[s * block + block_index<Dim>(o)];
             if (q == tree::no_cell) return;
-            const long m = static_cast<long>(at[q]) * n_sides;
+            const long first = static_cast<long>(at[q]) * n_sides;
             for (int side = 0; side < 2; ++side) {
-              const int found = side_count[m + 2 * k + side];
+              const int found = side_count[first + 2 * k + side];
               LIQUID_VERIFY(found == 1, "UniformPatches: cell {} has {} faces on side {}{} inside a patch", q,
                             found, side ? '+' : '-', k);
               IVec<Dim> oo = o;
               oo[k] = side;
-              faces_table_[(s * Dim + k) * axis_faces + face_index<Dim>(k, oo)] = side_face[m + 2 * k + side];
+              faces_table_[(s * Dim + k) * axis_faces + face_index<Dim>(k, oo)] =
+                  side_face[first + 2 * k + side];
             }
           });
       },
