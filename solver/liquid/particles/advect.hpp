@@ -6,6 +6,7 @@
 // the solid's signed distance.
 
 #include <cmath>
+#include <cstdint>
 #include <span>
 
 #include "liquid/core/error.hpp"
@@ -49,18 +50,25 @@ int push_out(const levelset::Function<Dim>& solid, double eps, Vec<Dim>& x) {
 
 /// Advances every position by dt through `u` (called from several threads at once) and returns what
 /// the boundary treatment did. `solid` may be empty (no solid). Throws naming the particle when a
-/// position or a velocity is not finite.
+/// position or a velocity is not finite. `order` (optional, a permutation of the positions, e.g.
+/// CellBins::index) is the order the positions are visited in: each moves on its own, so the result
+/// is the same in any order, and an order that keeps a cell's particles together reads each cell's
+/// velocity data once rather than once per particle.
 template <int Dim, class Velocity>
 AdvectReport advect(std::span<Vec<Dim>> x, double dt, Integrator integrator, const Velocity& u,
-                    const Box<Dim>& domain, const levelset::Function<Dim>& solid = {}) {
+                    const Box<Dim>& domain, const levelset::Function<Dim>& solid = {},
+                    std::span<const std::int32_t> order = {}) {
   LIQUID_VERIFY(std::isfinite(dt) && dt >= 0.0, "advect: time step {} is not a finite non-negative number",
                 dt);
+  LIQUID_VERIFY(order.empty() || order.size() == x.size(), "advect: an order of {} for {} positions",
+                order.size(), x.size());
   const double margin = 1e-9 * domain.size().maxCoeff();
   const double eps = 1e-6 * domain.size().maxCoeff();
   AdvectReport total;
   parallel_for(
       static_cast<long>(x.size()), [] { return AdvectReport{}; },
-      [&](AdvectReport& r, long i) {
+      [&](AdvectReport& r, long visit) {
+        const long i = order.empty() ? visit : order[visit];
         Vec<Dim> p = x[i];
         const Vec<Dim> k1 = u(p);
         Vec<Dim> step;

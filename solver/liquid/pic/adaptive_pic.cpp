@@ -821,7 +821,7 @@ void AdaptivePic<Dim>::to_particles(PicStepReport& r) {
   if (lattice_) {
     std::span<double> affine;
     if (options_.transfer == PicTransfer::apic) affine = particles_.field(apic_field_);
-    r.g2p = transfer::linear_to_points<Dim>(*lattice_, u_, particles_.x, grid, affine);
+    r.g2p = transfer::linear_to_points<Dim>(*lattice_, u_, particles_.x, grid, affine, bins_.index);
   } else {
     // One RBF field serves g2p and the advection after it: each cell's interpolants are factorised
     // once a step instead of twice (the same stencils and values as faces_to_points). With uniform
@@ -831,9 +831,13 @@ void AdaptivePic<Dim>::to_particles(PicStepReport& r) {
                                                                 patches_.get(), interpolants_.get());
     std::span<double> affine;
     if (patches_) affine = particles_.field(apic_field_);
+    // Cell by cell (the bins' order): a cell's particles read the same faces one after another.
+    LIQUID_ASSERT(static_cast<int>(bins_.index.size()) == n, "g2p: {} binned particles, {} particles",
+                  bins_.index.size(), n);
     parallel_for(
         static_cast<long>(n),
-        [&](long i) {
+        [&](long q) {
+          const long i = bins_.index[q];
           if (patches_ && patches_->cell(bins_.cell[i])) {
             grid[i] = patches_->value(bins_.cell[i], particles_.x[i], u_, affine.data() + i * Dim * Dim);
             return;
@@ -852,7 +856,7 @@ void AdaptivePic<Dim>::to_particles(PicStepReport& r) {
     std::vector<double> du(u_.size());
     for (std::size_t f = 0; f < u_.size(); ++f) du[f] = u_[f] - u_transferred_[f];
     std::vector<Vec<Dim>> delta(n);
-    transfer::linear_to_points<Dim>(*lattice_, du, particles_.x, delta);
+    transfer::linear_to_points<Dim>(*lattice_, du, particles_.x, delta, {}, bins_.index);
     transfer::flip_blend<Dim>(grid, delta, options_.flip, particles_.v);
   } else {
     particles_.v = std::move(grid);
@@ -874,8 +878,8 @@ void AdaptivePic<Dim>::advect(double dt, PicStepReport& r) {
   r.n_substeps = n_sub;
   const auto run = [&](const auto& field) {
     for (int s = 0; s < n_sub; ++s) {
-      const particles::AdvectReport a = particles::advect<Dim>(particles_.x, dt / n_sub, options_.integrator,
-                                                               field, graph_.domain(), options_.solid);
+      const particles::AdvectReport a = particles::advect<Dim>(
+          particles_.x, dt / n_sub, options_.integrator, field, graph_.domain(), options_.solid, bins_.index);
       r.advect.clamped += a.clamped;
       r.advect.pushed += a.pushed;
       r.advect.stuck += a.stuck;

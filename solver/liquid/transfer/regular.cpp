@@ -328,14 +328,17 @@ TransferReport linear_to_faces_gather(const tree::CellGraph<Dim>& graph, const R
 
 template <int Dim>
 TransferReport linear_to_points(const RegularLattice<Dim>& lattice, std::span<const double> u,
-                                std::span<const Vec<Dim>> x, std::span<Vec<Dim>> v,
-                                std::span<double> affine) {
+                                std::span<const Vec<Dim>> x, std::span<Vec<Dim>> v, std::span<double> affine,
+                                std::span<const std::int32_t> order) {
   LIQUID_VERIFY(v.size() == x.size(), "linear_to_points: {} outputs for {} points", v.size(), x.size());
   LIQUID_VERIFY(affine.empty() || affine.size() == x.size() * Dim * Dim,
                 "linear_to_points: affine field of {} doubles for {} points", affine.size(), x.size());
+  LIQUID_VERIFY(order.empty() || order.size() == x.size(), "linear_to_points: an order of {} for {} points",
+                order.size(), x.size());
   parallel_for(
       static_cast<long>(x.size()),
-      [&](long p) {
+      [&](long q) {
+        const long p = order.empty() ? q : order[q];
         for (int k = 0; k < Dim; ++k) {
           const LinearStencil<Dim> st(lattice, k, x[p]);
           double value = 0.0;
@@ -433,25 +436,25 @@ Eigen::Vector3d face_angular_momentum(const tree::CellGraph<Dim>& graph, const F
   return total;
 }
 
-#define LIQUID_REGULAR(D)                                                                                  \
-  template class RegularLattice<D>;                                                                        \
-  template struct LinearStencil<D>;                                                                        \
-  template TransferReport linear_to_faces<D>(const tree::CellGraph<D>&, const RegularLattice<D>&,          \
-                                             const particles::Particles<D>&, const particles::CellBins&,   \
-                                             RegularScheme, std::span<const double>, FaceValues&);         \
-  template TransferReport linear_to_faces_gather<D>(                                                       \
-      const tree::CellGraph<D>&, const RegularLattice<D>&, const particles::Particles<D>&,                 \
-      const particles::CellBins&, RegularScheme, std::span<const double>, FaceValues&);                    \
-  template TransferReport linear_to_points<D>(const RegularLattice<D>&, std::span<const double>,           \
-                                              std::span<const Vec<D>>, std::span<Vec<D>>,                  \
-                                              std::span<double>);                                          \
-  template Vec<D> particle_momentum<D>(const particles::Particles<D>&, std::span<const double>);           \
-  template Vec<D> face_momentum<D>(const tree::CellGraph<D>&, const FaceValues&);                          \
-  template Eigen::Vector3d particle_angular_momentum<D>(const RegularLattice<D>&,                          \
-                                                        const particles::Particles<D>&,                    \
-                                                        std::span<const double>, std::span<const double>); \
-  template Eigen::Vector3d face_angular_momentum<D>(const tree::CellGraph<D>&, const FaceValues&);         \
-  template double particle_affine_energy<D>(const RegularLattice<D>&, const particles::Particles<D>&,      \
+#define LIQUID_REGULAR(D)                                                                                    \
+  template class RegularLattice<D>;                                                                          \
+  template struct LinearStencil<D>;                                                                          \
+  template TransferReport linear_to_faces<D>(const tree::CellGraph<D>&, const RegularLattice<D>&,            \
+                                             const particles::Particles<D>&, const particles::CellBins&,     \
+                                             RegularScheme, std::span<const double>, FaceValues&);           \
+  template TransferReport linear_to_faces_gather<D>(                                                         \
+      const tree::CellGraph<D>&, const RegularLattice<D>&, const particles::Particles<D>&,                   \
+      const particles::CellBins&, RegularScheme, std::span<const double>, FaceValues&);                      \
+  template TransferReport linear_to_points<D>(const RegularLattice<D>&, std::span<const double>,             \
+                                              std::span<const Vec<D>>, std::span<Vec<D>>, std::span<double>, \
+                                              std::span<const std::int32_t>);                                \
+  template Vec<D> particle_momentum<D>(const particles::Particles<D>&, std::span<const double>);             \
+  template Vec<D> face_momentum<D>(const tree::CellGraph<D>&, const FaceValues&);                            \
+  template Eigen::Vector3d particle_angular_momentum<D>(const RegularLattice<D>&,                            \
+                                                        const particles::Particles<D>&,                      \
+                                                        std::span<const double>, std::span<const double>);   \
+  template Eigen::Vector3d face_angular_momentum<D>(const tree::CellGraph<D>&, const FaceValues&);           \
+  template double particle_affine_energy<D>(const RegularLattice<D>&, const particles::Particles<D>&,        \
                                             std::span<const double>, std::span<const double>);
 LIQUID_REGULAR(2)
 LIQUID_REGULAR(3)

@@ -126,11 +126,13 @@ TransferReport linear_to_faces_gather(const tree::CellGraph<Dim>& graph, const R
                                       std::span<const double> masses, FaceValues& out);
 
 /// Face -> point on a uniform tree: v (out) at every x. With `affine` non-empty (Dim*Dim doubles per
-/// point) APIC's matrix C is written there too.
+/// point) APIC's matrix C is written there too. `order` (optional, a permutation of the points, e.g.
+/// CellBins::index): the order the points are visited in; the same values in any order, and fewer
+/// cache misses in one that keeps a cell's points together.
 template <int Dim>
 TransferReport linear_to_points(const RegularLattice<Dim>& lattice, std::span<const double> u,
                                 std::span<const Vec<Dim>> x, std::span<Vec<Dim>> v,
-                                std::span<double> affine = {});
+                                std::span<double> affine = {}, std::span<const std::int32_t> order = {});
 
 /// sum_p m_p v_p (masses empty: unit masses).
 template <int Dim>

@@ -5,8 +5,10 @@
 #include <gtest/gtest.h>
 #include <omp.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <numeric>
 #include <random>
 
 #include "liquid/core/error.hpp"
@@ -362,6 +364,31 @@ TYPED_TEST(ParticlesTest, AdvectionClampsToTheDomainAndPushesOutOfSolids) {
   for (const auto& p : x) EXPECT_TRUE(domain.contains(p));
   const auto nan = [](const Vec<Dim>&) { return Vec<Dim>::Constant(std::nan("")); };
   EXPECT_THROW(particles::advect<Dim>(x, 0.1, particles::Integrator::rk2, nan, domain), Error);
+}
+
+TYPED_TEST(ParticlesTest, AdvectionInAnyOrderMovesEachParticleAlike) {
+  constexpr int Dim = TypeParam::value;
+  const Box<Dim> domain{Vec<Dim>::Zero(), Vec<Dim>::Ones()};
+  const auto solid = levelset::sphere<Dim>(Vec<Dim>::Constant(0.5), 0.2);
+  auto x = random_points<Dim>(300, 11, 0.0, 1.0);
+  std::erase_if(x, [&](const Vec<Dim>& p) { return solid(p) < 0.0; });
+  const auto swirl = [](const Vec<Dim>& p) {
+    Vec<Dim> v = Vec<Dim>::Zero();
+    v[0] = -(p[1] - 0.5) + 0.3 * p[0] * p[0];
+    v[1] = (p[0] - 0.5);
+    return v;
+  };
+  std::vector<std::int32_t> order(x.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::shuffle(order.begin(), order.end(), std::mt19937(5));
+  auto y = x;
+  const auto a = particles::advect<Dim>(x, 0.4, particles::Integrator::rk3, swirl, domain, solid);
+  const auto b = particles::advect<Dim>(y, 0.4, particles::Integrator::rk3, swirl, domain, solid, order);
+  EXPECT_EQ(a.pushed, b.pushed);
+  EXPECT_EQ(a.clamped, b.clamped);
+  for (std::size_t i = 0; i < x.size(); ++i) EXPECT_EQ(x[i], y[i]) << "particle " << i;
+  order.pop_back();
+  EXPECT_THROW(particles::advect<Dim>(y, 0.1, particles::Integrator::rk2, swirl, domain, {}, order), Error);
 }
 
 }  // namespace

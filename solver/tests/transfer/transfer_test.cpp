@@ -217,7 +217,16 @@ TYPED_TEST(TransferTest, ApicConservesLinearAndAngularMomentum) {
   EXPECT_LT((p1 - p0).norm(), 1e-11 * p0.norm() + 1e-11);
   EXPECT_LT((l1 - l0).norm(), 1e-11 * l0.norm() + 1e-11);
 
+  // Visiting the points cell by cell (the bins' order) gives the same values bit for bit.
+  std::vector<Vec<Dim>> v_binned(p.size());
+  std::vector<double> c_binned(p.field(apic).size());
+  transfer::linear_to_points<Dim>(lattice, faces.value, p.x, v_binned, c_binned, bins.index);
   transfer::linear_to_points<Dim>(lattice, faces.value, p.x, p.v, p.field(apic));
+  for (int i = 0; i < p.size(); ++i) EXPECT_EQ(v_binned[i], p.v[i]) << "point " << i;
+  EXPECT_TRUE(std::equal(c_binned.begin(), c_binned.end(), p.field(apic).begin()));
+  EXPECT_THROW(transfer::linear_to_points<Dim>(lattice, faces.value, p.x, v_binned, {},
+                                               std::span(bins.index).first(bins.index.size() - 1)),
+               Error);
   const Vec<Dim> p2 = transfer::particle_momentum<Dim>(p, masses);
   const Eigen::Vector3d l2 = transfer::particle_angular_momentum<Dim>(lattice, p, p.field(apic), masses);
   EXPECT_LT((p2 - p0).norm(), 1e-11 * p0.norm() + 1e-11);
