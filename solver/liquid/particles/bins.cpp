@@ -1,7 +1,6 @@
 #include "liquid/particles/bins.hpp"
 
 #include <algorithm>
-#include <limits>
 #include <utility>
 
 #include "liquid/core/error.hpp"
@@ -28,9 +27,7 @@ bool holds(const tree::CellGraph<Dim>& graph, tree::CellId c, const Vec<Dim>& x)
 
 }  // namespace
 
-void CellBins::sort(int cell_capacity, std::span<const double> key) {
-  LIQUID_VERIFY(key.empty() || key.size() == cell.size(), "CellBins::sort: {} keys for {} particles",
-                key.size(), cell.size());
+void CellBins::sort(int cell_capacity) {
   begin.assign(static_cast<std::size_t>(cell_capacity) + 1, 0);
   for (tree::CellId c : cell) {
     LIQUID_ASSERT(c >= 0 && c < cell_capacity, "CellBins::sort: cell id {} out of range", c);
@@ -40,32 +37,18 @@ void CellBins::sort(int cell_capacity, std::span<const double> key) {
   index.resize(cell.size());
   std::vector<std::int32_t> next(begin.begin(), begin.end() - 1);
   for (std::size_t i = 0; i < cell.size(); ++i) index[next[cell[i]]++] = static_cast<std::int32_t>(i);
-  if (key.empty()) return;
-  // Each cell's list in ascending key (0 last), stable; most lists already are.
-  const auto rank = [&](std::int32_t i) {
-    return key[i] > 0.0 ? key[i] : std::numeric_limits<double>::infinity();
-  };
-  const auto before = [&](std::int32_t a, std::int32_t b) { return rank(a) < rank(b); };
-  parallel_for(
-      cell_capacity,
-      [&](long c) {
-        const auto first = index.begin() + begin[c], last = index.begin() + begin[c + 1];
-        if (!std::is_sorted(first, last, before)) std::stable_sort(first, last, before);
-      },
-      4096);
 }
 
 template <int Dim>
-void bin_particles(const tree::CellGraph<Dim>& graph, std::span<const Vec<Dim>> x, CellBins& bins,
-                   std::span<const double> key) {
+void bin_particles(const tree::CellGraph<Dim>& graph, std::span<const Vec<Dim>> x, CellBins& bins) {
   bins.cell.resize(x.size());
   graph.locate(x, bins.cell);
-  bins.sort(graph.cell_capacity(), key);
+  bins.sort(graph.cell_capacity());
 }
 
 template <int Dim>
 BinStats rebin(const tree::CellGraph<Dim>& graph, std::span<const Vec<Dim>> x, CellBins& bins,
-               const tree::AdaptReport* report, std::span<const double> key) {
+               const tree::AdaptReport* report) {
   bins.cell.resize(x.size(), tree::no_cell);
   // (removed cell, cell that replaced part of it), sorted: O(changed cells log changed cells).
   std::vector<std::pair<tree::CellId, tree::CellId>> replaced;
@@ -117,15 +100,14 @@ BinStats rebin(const tree::CellGraph<Dim>& graph, std::span<const Vec<Dim>> x, C
         total.located += t.s.located;
       },
       1024);
-  bins.sort(graph.cell_capacity(), key);
+  bins.sort(graph.cell_capacity());
   return total;
 }
 
-#define LIQUID_BINS(D)                                                                          \
-  template void bin_particles<D>(const tree::CellGraph<D>&, std::span<const Vec<D>>, CellBins&, \
-                                 std::span<const double>);                                      \
-  template BinStats rebin<D>(const tree::CellGraph<D>&, std::span<const Vec<D>>, CellBins&,     \
-                             const tree::AdaptReport*, std::span<const double>);
+#define LIQUID_BINS(D)                                                                           \
+  template void bin_particles<D>(const tree::CellGraph<D>&, std::span<const Vec<D>>, CellBins&); \
+  template BinStats rebin<D>(const tree::CellGraph<D>&, std::span<const Vec<D>>, CellBins&,      \
+                             const tree::AdaptReport*);
 LIQUID_BINS(2)
 LIQUID_BINS(3)
 #undef LIQUID_BINS

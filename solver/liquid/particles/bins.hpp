@@ -32,17 +32,9 @@ struct CellBins {
   }
   int count(tree::CellId c) const { return static_cast<int>(of(c).size()); }
   int n_particles() const { return static_cast<int>(cell.size()); }
-  /// Rebuilds begin/index from `cell` (a counting sort), for a graph of `cell_capacity` ids. With
-  /// `key` (one value per particle), a cell's particles are listed in ascending key instead, key 0
-  /// (a particle not given one yet) after every positive key, ties in index order. The owner of an
-  /// array it reorders keeps each particle's creation number there (creation_field), so that a
-  /// cell's list, and every sum over it, does not depend on where its particles sit in the array.
-  void sort(int cell_capacity, std::span<const double> key = {});
+  /// Rebuilds begin/index from `cell` (a counting sort), for a graph of `cell_capacity` ids.
+  void sort(int cell_capacity);
 };
-
-/// The particle field that holds each particle's creation number (1, 2, ...; 0 for one not
-/// numbered yet), the key of CellBins::sort for an owner that reorders its particle array.
-inline constexpr const char* creation_field = "creation";
 
 /// How rebin() found each particle's cell.
 struct BinStats {
@@ -53,8 +45,7 @@ struct BinStats {
 
 /// Bins every position from scratch (a root location per particle). Uses OpenMP.
 template <int Dim>
-void bin_particles(const tree::CellGraph<Dim>& graph, std::span<const Vec<Dim>> x, CellBins& bins,
-                   std::span<const double> key = {});
+void bin_particles(const tree::CellGraph<Dim>& graph, std::span<const Vec<Dim>> x, CellBins& bins);
 
 /// Rebins after the particles moved and/or the graph changed. `bins.cell` holds the previous cells
 /// and must have one entry per position (particles appended since carry no_cell and are located
@@ -63,6 +54,6 @@ void bin_particles(const tree::CellGraph<Dim>& graph, std::span<const Vec<Dim>> 
 /// thread count.
 template <int Dim>
 BinStats rebin(const tree::CellGraph<Dim>& graph, std::span<const Vec<Dim>> x, CellBins& bins,
-               const tree::AdaptReport* report = nullptr, std::span<const double> key = {});
+               const tree::AdaptReport* report = nullptr);
 
 }  // namespace liquid::particles

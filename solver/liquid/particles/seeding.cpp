@@ -187,11 +187,7 @@ ReseedReport reseed(const tree::CellGraph<Dim>& graph, std::span<const tree::Cel
            std::span<const tree::CellId>(cell_of).subspan(first),
            std::span<Vec<Dim>>(particles.v).subspan(first));
   bins.cell = std::move(cell_of);
-  // With creation numbers, the new particles (numbered 0 until their owner numbers them) come
-  // after a cell's others, as in index order.
-  const int creation = particles.find_field(creation_field);
-  bins.sort(graph.cell_capacity(),
-            creation >= 0 ? std::span<const double>(particles.field(creation)) : std::span<const double>{});
+  bins.sort(graph.cell_capacity());
   return report;
 }
 

@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <numeric>
 
 #include <fmt/format.h>
 
@@ -128,7 +127,6 @@ AdaptivePic<Dim>::AdaptivePic(const PicOptions<Dim>& options)
   if (options_.transfer != PicTransfer::rbf)
     lattice_ = std::make_unique<transfer::RegularLattice<Dim>>(graph_);
   if (affine_particles()) apic_field_ = particles_.add_field("apic", Dim * Dim);
-  creation_field_ = particles_.add_field(particles::creation_field, 1);
   u_.assign(graph_.face_capacity(), 0.0);
   known_.assign(graph_.face_capacity(), 1);
   p_.assign(graph_.cell_capacity(), 0.0);
@@ -168,8 +166,7 @@ void AdaptivePic<Dim>::seed(const levelset::Function<Dim>& liquid,
       options_.solid ? levelset::subtract<Dim>(liquid, options_.solid) : liquid;
   const long n = particles::seed_region<Dim>(graph_, region, particles::SeedOptions{}, particles_, source);
   LIQUID_VERIFY_INPUT(n > 0, "PIC: the liquid region holds no cell's sample point: nothing to simulate");
-  number_new_particles();
-  particles::bin_particles<Dim>(graph_, particles_.x, bins_, creation());
+  particles::bin_particles<Dim>(graph_, particles_.x, bins_);
   u_.assign(graph_.face_capacity(), 0.0);
   known_.assign(graph_.face_capacity(), 1);
   p_.assign(graph_.cell_capacity(), 0.0);
@@ -189,10 +186,8 @@ void AdaptivePic<Dim>::seed(const levelset::Function<Dim>& liquid,
     // start with less energy than their velocity field, which the first step's transfers restore
     // and which would read as an energy gain.
     particles_.clear();
-    next_creation_ = 1;
     particles::seed_region<Dim>(graph_, region, particles::SeedOptions{}, particles_, source);
-    number_new_particles();
-    particles::bin_particles<Dim>(graph_, particles_.x, bins_, creation());
+    particles::bin_particles<Dim>(graph_, particles_.x, bins_);
     u_.assign(graph_.face_capacity(), 0.0);
     known_.assign(graph_.face_capacity(), 1);
     p_.assign(graph_.cell_capacity(), 0.0);
@@ -290,14 +285,8 @@ void AdaptivePic<Dim>::restore(const PicState<Dim>& s) {
   }
   for (tree::CellId c : s.particle_cell)
     LIQUID_VERIFY(graph_.alive(c), "PIC: a saved particle is binned in cell {}, which is not a leaf", c);
-  // A state saved without creation numbers holds its particles in creation order.
-  creation_field_ = particles_.find_field(particles::creation_field);
-  if (creation_field_ < 0) creation_field_ = particles_.add_field(particles::creation_field, 1);
-  next_creation_ = 1;
-  for (double k : creation()) next_creation_ = std::max(next_creation_, k + 1);
-  number_new_particles();
   bins_.cell = s.particle_cell;
-  bins_.sort(graph_.cell_capacity(), creation());
+  bins_.sort(graph_.cell_capacity());
   u_ = s.u;
   p_ = s.p;
   known_ = s.known;
@@ -351,7 +340,6 @@ void AdaptivePic<Dim>::apply_sources(PicStepReport& r) {
           std::fill(out.begin(), out.end(), v);
         };
     const particles::ReseedReport rep = particles::reseed<Dim>(graph_, cells, o, inflow, particles_, bins_);
-    number_new_particles();
     r.n_source += rep.created - rep.deleted;
     for (tree::CellId c : cells)
       for (std::int32_t i : bins_.of(c))
@@ -366,7 +354,6 @@ void AdaptivePic<Dim>::fill(std::span<const tree::CellId> cells, PicStepReport& 
   o.fill_empty = true;
   const particles::ReseedReport rep =
       particles::reseed<Dim>(graph_, cells, o, grid_velocity(), particles_, bins_);
-  number_new_particles();
   r.n_filled += rep.created - rep.deleted;
 }
 
@@ -427,7 +414,7 @@ void AdaptivePic<Dim>::adapt_grid(PicStepReport& r) {
       solid_.resize(graph_.cell_capacity(), 0);
       for (tree::CellId c : report.new_cells) solid_[c] = options_.solid(graph_.centre(c)) < 0.0;
     }
-    particles::rebin<Dim>(graph_, particles_.x, bins_, &report, creation());
+    particles::rebin<Dim>(graph_, particles_.x, bins_, &report);
     std::vector<tree::CellId> children;
     const tree::Origins& o = report.cell_origins;
     for (std::size_t n = 0; n < report.new_cells.size(); ++n) {
@@ -903,7 +890,7 @@ void AdaptivePic<Dim>::advect(double dt, PicStepReport& r) {
   } else {
     run(*field_);  // built by g2p from the same face velocities
   }
-  particles::rebin<Dim>(graph_, particles_.x, bins_, nullptr, creation());
+  particles::rebin<Dim>(graph_, particles_.x, bins_);
   check_particles("advect");
 }
 
@@ -924,13 +911,12 @@ void AdaptivePic<Dim>::reseed(PicStepReport& r, std::span<const tree::CellId> wa
   particles::ReseedOptions o = options_.reseeding;
   o.fill_empty = true;
   r.reseed = particles::reseed<Dim>(graph_, interior, o, grid_velocity(), particles_, bins_);
-  number_new_particles();
   if (options_.solid) {  // a new particle in the solid part of a fluid cell is pushed out at once
     const double eps = 1e-6 * graph_.domain().size().maxCoeff();
     long moved = 0;
     for (int i = particles_.size() - static_cast<int>(r.reseed.created); i < particles_.size(); ++i)
       moved += particles::detail::push_out<Dim>(options_.solid, eps, particles_.x[i]) > 0;
-    if (moved > 0) particles::rebin<Dim>(graph_, particles_.x, bins_, nullptr, creation());
+    if (moved > 0) particles::rebin<Dim>(graph_, particles_.x, bins_);
     r.advect.pushed += moved;
   }
   // New particles start with a zero affine part (APIC): fields of new particles are zero.
@@ -984,15 +970,8 @@ PicStepReport AdaptivePic<Dim>::advance(double dt) {
     });
     phase("extrapolate", [&] { extrapolate(); });
     phase("g2p", [&] { to_particles(r); });
-    phase("advect", [&] {
-      advect(dt, r);
-      if (!options_.reseed) order_particles();
-    });
-    if (options_.reseed)
-      phase("reseed", [&] {
-        reseed(r, was_interior);
-        order_particles();
-      });
+    phase("advect", [&] { advect(dt, r); });
+    if (options_.reseed) phase("reseed", [&] { reseed(r, was_interior); });
   }
   ++step_;
   time_ += dt;
@@ -1013,38 +992,6 @@ double AdaptivePic<Dim>::stable_dt(double cfl, double max_dt) const {
   // Gravity accelerates a particle at rest by |g| dt within the step: include it.
   vmax += std::sqrt(options_.gravity.norm() * finest_h());
   return vmax > 0.0 ? std::min(max_dt, cfl * finest_h() / vmax) : max_dt;
-}
-
-template <int Dim>
-void AdaptivePic<Dim>::number_new_particles() {
-  std::span<double> k = particles_.field(creation_field_);
-  for (double& c : k)
-    if (c == 0.0) c = next_creation_++;
-}
-
-template <int Dim>
-void AdaptivePic<Dim>::order_particles() {
-  const int n = particles_.size();
-  LIQUID_ASSERT(bins_.n_particles() == n, "order_particles: {} binned, {} particles", bins_.n_particles(), n);
-  particles::Particles<Dim> ordered = particles_;
-  std::vector<tree::CellId> cell(n);
-  parallel_for(
-      n,
-      [&](long q) {
-        const int i = bins_.index[q];
-        ordered.x[q] = particles_.x[i];
-        ordered.v[q] = particles_.v[i];
-        cell[q] = bins_.cell[i];
-        for (int f = 0; f < particles_.n_fields(); ++f) {
-          const int m = particles_.field_components(f);
-          std::copy_n(particles_.field(f).data() + static_cast<long>(i) * m, m,
-                      ordered.field(f).data() + q * m);
-        }
-      },
-      4096);
-  particles_ = std::move(ordered);
-  bins_.cell = std::move(cell);
-  std::iota(bins_.index.begin(), bins_.index.end(), 0);
 }
 
 template <int Dim>

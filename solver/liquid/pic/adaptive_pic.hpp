@@ -342,13 +342,6 @@ class AdaptivePic {
   particles::VelocitySource<Dim> grid_velocity() const;
   void check_faces(const char* phase) const;
   void check_particles(const char* phase) const;
-  /// The particles' creation numbers (the bins' key: see particles::CellBins::sort).
-  std::span<const double> creation() const { return particles_.field(creation_field_); }
-  /// Numbers the particles created since the last call (creation 0), in index order.
-  void number_new_particles();
-  /// Reorders the particle array as the bins list it (cell by cell), so that the next step's
-  /// per-cell loops read contiguous particles. Each cell's list, ordered by creation, is unchanged.
-  void order_particles();
 
   PicOptions<Dim> options_;
   tree::CellGraph<Dim> graph_;
@@ -387,8 +380,6 @@ class AdaptivePic {
   double time_ = 0.0;
   long step_ = 0;
   int apic_field_ = -1;
-  int creation_field_ = -1;   // particles::creation_field
-  double next_creation_ = 1;  // the next particle's creation number
   bool seeded_ = false;
 };
 

@@ -94,36 +94,6 @@ void expect_bins_match_location(const tree::CellGraph<Dim>& g, std::span<const V
   EXPECT_EQ(listed, static_cast<long>(x.size()));
 }
 
-// With keys, a cell's list is in ascending key, key 0 (not numbered yet) after the others, ties in
-// index order; the same cells and counts as without.
-TYPED_TEST(ParticlesTest, KeyedBinsListACellInKeyOrderWithUnnumberedLast) {
-  constexpr int Dim = TypeParam::value;
-  const auto g = random_tree<Dim>(4);
-  const auto x = random_points<Dim>(3000, 12);
-  std::mt19937_64 rng(8);
-  std::uniform_int_distribution<int> draw(0, 40);  // repeats, and about one zero in 40
-  std::vector<double> key(x.size());
-  for (double& k : key) k = draw(rng);
-  particles::CellBins plain, keyed;
-  particles::bin_particles<Dim>(g, x, plain);
-  particles::bin_particles<Dim>(g, x, keyed, key);
-  ASSERT_EQ(plain.cell, keyed.cell);
-  ASSERT_EQ(plain.begin, keyed.begin);
-  const auto rank = [&](std::int32_t i) { return key[i] > 0 ? key[i] : 1e300; };
-  long out_of_order = 0;
-  g.for_each_cell([&](tree::CellId c) {
-    std::vector<std::int32_t> expected(plain.of(c).begin(), plain.of(c).end());
-    std::stable_sort(expected.begin(), expected.end(),
-                     [&](std::int32_t a, std::int32_t b) { return rank(a) < rank(b); });
-    const auto got = keyed.of(c);
-    ASSERT_TRUE(std::equal(got.begin(), got.end(), expected.begin(), expected.end())) << "cell " << c;
-    out_of_order += !std::equal(got.begin(), got.end(), plain.of(c).begin(), plain.of(c).end());
-  });
-  EXPECT_GT(out_of_order, 10);  // the keys did reorder lists
-  key.pop_back();
-  EXPECT_THROW(particles::bin_particles<Dim>(g, x, keyed, key), Error);
-}
-
 TEST(Halton, IsTheHaltonSequence) {
   const auto p2 = particles::halton_points<2>(50);
   const auto p3 = particles::halton_points<3>(50);

@@ -84,36 +84,6 @@ TEST(AdaptivePic, DamBreakRunsStableAndSpreads2D) {
   }
 }
 
-// After a step the particle array is in the bins' order (cell by cell), and each cell lists its
-// particles in creation order, the order a step's per-cell sums take: the array's order is then
-// free to follow space without changing any result (checked bit for bit against the unordered
-// array when it was introduced; RestoredSolverTakesTheSameStepsBitForBit covers a restore).
-TEST(AdaptivePic, ParticlesAreStoredCellByCellAndListedInCreationOrder) {
-  for (bool adaptive : {true, false}) {
-    pic::PicOptions<2> o;
-    o.adaptive = adaptive;
-    o.transfer = adaptive ? pic::PicTransfer::rbf : pic::PicTransfer::apic;
-    o.finest_level = 5;
-    o.coarse_level = 2;
-    pic::AdaptivePic<2> sim(o);
-    sim.seed(levelset::box<2>({Vec<2>::Zero(), Vec<2>(0.4, 0.6)}));
-    for (int k = 0; k < 8; ++k) sim.advance(sim.stable_dt(1.0, 0.01));
-    const auto& p = sim.particles();
-    const auto& bins = sim.bins();
-    const auto creation = p.field(p.field_index(particles::creation_field));
-    long moved_in = 0;
-    for (int q = 0; q < p.size(); ++q) {
-      ASSERT_EQ(bins.index[q], q) << "adaptive " << adaptive;
-      ASSERT_GT(creation[q], 0.0);
-      if (q > 0 && bins.cell[q] == bins.cell[q - 1]) {
-        ASSERT_LT(creation[q - 1], creation[q]) << "particle " << q;
-        moved_in += creation[q] - creation[q - 1] > 1.0;
-      }
-    }
-    EXPECT_GT(moved_in, 0);  // cells do list particles that were not neighbours in the array
-  }
-}
-
 // Flux rows make the PPE the divergence of the projection's own gradient: on a collapsing column the
 // divergence a projection leaves (PicStepReport::divergence_after) is the solver's residual alone,
 // far below what the RBF-FD Laplacian rows leave at the T-junctions.
