@@ -53,12 +53,10 @@ int carried_degree(std::span<const Vec<Dim>> z, int requested, double tolerance,
   P.resize(n, full.size());
   for (int j = 0; j < n; ++j)
     for (int t = 0; t < full.size(); ++t) P(j, t) = full.value(t, z[j]);
-  // One factorisation object per thread: its work arrays are reused from stencil to stencil.
-  thread_local Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr;
   for (int m = top; m >= 0; --m) {
     const int n_terms = n_polynomial_terms(Dim, m);
     if (n_terms > n) continue;
-    qr.compute(P.leftCols(n_terms));
+    Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(P.leftCols(n_terms));
     qr.setThreshold(tolerance);
     if (qr.rank() == n_terms) return m;
   }
