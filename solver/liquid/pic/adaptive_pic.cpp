@@ -811,7 +811,7 @@ void AdaptivePic<Dim>::extrapolate() {
   if (lattice_)
     transfer::extrapolate_lattice<Dim>(*lattice_, options_.extrapolation_layers, u_, known_);
   else
-    transfer::extrapolate_faces<Dim>(graph_, options_.extrapolation_layers, u_, known_);
+    transfer::extrapolate_faces<Dim>(graph_, options_.extrapolation_layers, u_, known_, &adjacency_);
 }
 
 template <int Dim>

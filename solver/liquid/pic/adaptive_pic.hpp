@@ -33,6 +33,7 @@
 #include "liquid/particles/seeding.hpp"
 #include "liquid/pic/classify.hpp"
 #include "liquid/pic/surface.hpp"
+#include "liquid/transfer/extrapolate.hpp"
 #include "liquid/transfer/face_values.hpp"
 #include "liquid/transfer/regular.hpp"
 #include "liquid/transfer/scattered.hpp"
@@ -349,6 +350,7 @@ class AdaptivePic {
   std::unique_ptr<transfer::FaceVelocityField<Dim>> field_;  // the RBF velocity of this step (g2p, advect)
   std::unique_ptr<transfer::UniformPatches<Dim>> patches_;   // this step's uniform patches (p2g to advect)
   std::vector<tree::CellId> near_cells_;                     // this step's cells near the liquid
+  tree::CellAdjacency<Dim> adjacency_;                       // this step's faces by cell and axis
   particles::Particles<Dim> particles_;
   particles::CellBins bins_;
   pic::Classification cls_;

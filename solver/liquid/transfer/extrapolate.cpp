@@ -25,12 +25,15 @@ namespace liquid::transfer {
 
 template <int Dim>
 ExtrapolationReport extrapolate_faces(const tree::CellGraph<Dim>& graph, int layers, std::span<double> value,
-                                      std::span<std::uint8_t> known) {
+                                      std::span<std::uint8_t> known, tree::CellAdjacency<Dim>* adjacency) {
   LIQUID_VERIFY(layers >= 0, "extrapolate_faces: {} layers", layers);
   LIQUID_VERIFY(static_cast<int>(value.size()) >= graph.face_capacity() && known.size() == value.size(),
                 "extrapolate_faces: {} values and {} flags for {} face ids", value.size(), known.size(),
                 graph.face_capacity());
   ExtrapolationReport report;
+  tree::CellAdjacency<Dim> own;
+  tree::CellAdjacency<Dim>& adj = adjacency != nullptr ? *adjacency : own;
+  adj.bind(graph);
   const long n_cells = graph.cell_capacity();
   const long n_faces = graph.face_capacity();
   const auto bit = [&](tree::FaceId f) { return static_cast<std::uint8_t>(1u << graph.face(f).axis); };
@@ -41,8 +44,9 @@ ExtrapolationReport extrapolate_faces(const tree::CellGraph<Dim>& graph, int lay
       [&](long c) {
         if (!graph.alive(static_cast<tree::CellId>(c))) return;
         std::uint8_t h = 0;
-        for (tree::FaceId f : graph.faces(static_cast<tree::CellId>(c)))
-          if (known[f]) h |= bit(f);
+        for (int a = 0; a < Dim; ++a)
+          for (const auto& side : adj.of(static_cast<tree::CellId>(c), a))
+            if (known[side.face]) h |= static_cast<std::uint8_t>(1u << a);
         holds[c] = h;
       },
       2048);
@@ -61,11 +65,8 @@ ExtrapolationReport extrapolate_faces(const tree::CellGraph<Dim>& graph, int lay
           const auto c = static_cast<tree::CellId>(cl);
           if (!graph.alive(c)) return;
           std::uint8_t m = holds[c];
-          for (tree::FaceId f : graph.faces(c)) {
-            const tree::GraphFace& g = graph.face(f);
-            const tree::CellId o = g.cell[0] == c ? g.cell[1] : g.cell[0];
-            if (o != tree::no_cell) m |= holds[o];
-          }
+          for (const auto& side : adj.of(c))
+            if (side.other != tree::no_cell) m |= holds[side.other];
           near[c] = m;
         },
         2048);
@@ -93,20 +94,27 @@ ExtrapolationReport extrapolate_faces(const tree::CellGraph<Dim>& graph, int lay
           const tree::FaceId f = candidates[i];
           const int axis = graph.face(f).axis;
           const auto want = static_cast<std::uint8_t>(1u << axis);
-          face_neighbourhood<Dim>(graph, f, s.cells);
+          // The cells within a face hop of f's cells, by id (face_neighbourhood, from the pairs).
+          s.cells.clear();
+          for (tree::CellId c : graph.face(f).cell) {
+            if (c == tree::no_cell) continue;
+            s.cells.push_back(c);
+            for (const auto& side : adj.of(c))
+              if (side.other != tree::no_cell) s.cells.push_back(side.other);
+          }
+          std::sort(s.cells.begin(), s.cells.end());
+          s.cells.erase(std::unique(s.cells.begin(), s.cells.end()), s.cells.end());
           // Each face once: a face is counted from the lower-id cell holding it among s.cells.
           double sum = 0.0;
           long n = 0;
           for (tree::CellId c : s.cells) {
             if (!(holds[c] & want)) continue;  // no known face of this axis
-            for (tree::FaceId g : graph.faces(c)) {
-              const tree::GraphFace& gf = graph.face(g);
-              if (gf.axis != axis || !known[g]) continue;
-              const tree::CellId other = gf.cell[0] == c ? gf.cell[1] : gf.cell[0];
-              if (other != tree::no_cell && other < c &&
-                  std::binary_search(s.cells.begin(), s.cells.end(), other))
+            for (const auto& side : adj.of(c, axis)) {
+              if (!known[side.face]) continue;
+              if (side.other != tree::no_cell && side.other < c &&
+                  std::binary_search(s.cells.begin(), s.cells.end(), side.other))
                 continue;
-              sum += value[g];
+              sum += value[side.face];
               ++n;
             }
           }
@@ -298,9 +306,9 @@ ExtrapolationReport extrapolate_lattice(const RegularLattice<Dim>& lattice, int 
 }
 
 template ExtrapolationReport extrapolate_faces<2>(const tree::CellGraph<2>&, int, std::span<double>,
-                                                  std::span<std::uint8_t>);
+                                                  std::span<std::uint8_t>, tree::CellAdjacency<2>*);
 template ExtrapolationReport extrapolate_faces<3>(const tree::CellGraph<3>&, int, std::span<double>,
-                                                  std::span<std::uint8_t>);
+                                                  std::span<std::uint8_t>, tree::CellAdjacency<3>*);
 template ExtrapolationReport extrapolate_lattice<2>(const RegularLattice<2>&, int, std::span<double>,
                                                     std::span<std::uint8_t>);
 template ExtrapolationReport extrapolate_lattice<3>(const RegularLattice<3>&, int, std::span<double>,

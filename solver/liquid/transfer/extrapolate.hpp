@@ -11,6 +11,7 @@
 #include <span>
 #include <vector>
 
+#include "liquid/tree/cell_adjacency.hpp"
 #include "liquid/tree/cell_graph.hpp"
 
 namespace liquid::transfer {
@@ -24,9 +25,12 @@ struct ExtrapolationReport {
 };
 
 /// Fills unknown faces (known[f] == 0) of `value` up to `layers` layers deep; known is updated.
+/// `adjacency`, when given, is bound to the graph and kept for later calls on the same topology (a
+/// step extrapolates twice on one graph); the values are the same bits with or without it.
 template <int Dim>
 ExtrapolationReport extrapolate_faces(const tree::CellGraph<Dim>& graph, int layers, std::span<double> value,
-                                      std::span<std::uint8_t> known);
+                                      std::span<std::uint8_t> known,
+                                      tree::CellAdjacency<Dim>* adjacency = nullptr);
 
 /// The same extrapolation on a uniform tree, through its lattice: the same neighbourhoods, layers
 /// and report, the values equal up to the order of each mean's sum. The regular baselines' step

@@ -18,6 +18,7 @@
 // ids are never reused, so a field can be remapped in place.
 
 #include <array>
+#include <atomic>
 #include <cstdint>
 #include <functional>
 #include <limits>
@@ -41,6 +42,11 @@ inline constexpr FaceId no_face = -1;
 namespace detail {
 /// Loops shorter than this run on one thread: below it, starting threads costs more than it saves.
 inline constexpr long parallel_min = 8192;
+/// A number no graph state has had before in this process (see CellGraph::topology()).
+inline std::uint64_t next_topology() {
+  static std::atomic<std::uint64_t> last{0};
+  return ++last;
+}
 }  // namespace detail
 
 /// max_jump value that leaves the level jump between face neighbours unconstrained.
@@ -194,6 +200,9 @@ class CellGraph {
   int cell_capacity() const { return static_cast<int>(cells_.size()); }  ///< largest cell id + 1
   int face_capacity() const { return static_cast<int>(faces_.size()); }  ///< largest face id + 1
   int deepest_level() const { return deepest_; }
+  /// Changes whenever cells or faces do (a split, merge or adapt), and differs between graphs built
+  /// apart: what is derived from the topology alone holds while this number stays the same.
+  std::uint64_t topology() const { return topology_; }
   long n_cells_at_level(int level) const { return n_at_level_[level]; }
 
   // ---- cells
@@ -326,6 +335,7 @@ class CellGraph {
   int deepest_ = 0;
   int n_cells_ = 0;
   int n_faces_ = 0;
+  std::uint64_t topology_ = detail::next_topology();
 
   // Change log (valid between begin_change and end_change).
   std::uint32_t epoch_ = 0;

@@ -27,6 +27,7 @@ void CellGraph<Dim>::begin_change() {
   LIQUID_ASSERT(!in_change_, "CellGraph: nested change");
   ++epoch_;
   in_change_ = true;
+  topology_ = detail::next_topology();
 }
 
 template <int Dim>

@@ -411,6 +411,9 @@ TYPED_TEST(TransferTest, ExtrapolationMatchesTheDefinitionOnAnyThreadCount) {
     const auto g = random_tree<Dim>(40 + jump, jump);
     std::mt19937_64 rng(7 + jump);
     std::uniform_real_distribution<double> u(-1.0, 1.0);
+    const auto elsewhere = random_tree<Dim>(60 + jump, jump);
+    tree::CellAdjacency<Dim> kept;
+    kept.bind(elsewhere);
     // Known faces: those in a ball and, per axis, a few scattered ones, so fronts of different axes
     // start in different places and meet.
     // Known inside a ball (few known faces: the layers spread from them) or outside it (few unknown:
@@ -429,7 +432,8 @@ TYPED_TEST(TransferTest, ExtrapolationMatchesTheDefinitionOnAnyThreadCount) {
         omp_set_num_threads(1);
         const transfer::ExtrapolationReport r = transfer::extrapolate_faces<Dim>(g, layers, v1, k1);
         omp_set_num_threads(std::max(2, threads));
-        const transfer::ExtrapolationReport r2 = transfer::extrapolate_faces<Dim>(g, layers, v3, k3);
+        // With an adjacency kept from a call on another graph: it is remade for this one.
+        const transfer::ExtrapolationReport r2 = transfer::extrapolate_faces<Dim>(g, layers, v3, k3, &kept);
         omp_set_num_threads(threads);
         const std::vector<long> counts = extrapolate_by_definition<Dim>(g, layers, v2, k2);
         const long unknown =

@@ -1,5 +1,6 @@
 // CellGraph: split and merge in 2D and 3D, side faces, level-jump enforcement, the sibling test,
-// the bulk build against incremental splits, point location and k-ring against brute force.
+// the bulk build against incremental splits, point location and k-ring against brute force, and
+// the topology number with the adjacency derived from it.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -9,6 +10,7 @@
 
 #include "liquid/core/error.hpp"
 #include "liquid/tree/builders.hpp"
+#include "liquid/tree/cell_adjacency.hpp"
 #include "liquid/tree/cell_graph.hpp"
 
 namespace liquid {
@@ -266,6 +268,63 @@ TYPED_TEST(CellGraphTest, PointLocationMatchesBruteForce) {
   Vec<Dim> bad = domain.centre();
   bad[0] = std::numeric_limits<double>::quiet_NaN();
   EXPECT_THROW(g.locate(bad), Error);
+}
+
+/// Every alive cell's adjacency against its face list: per axis, the same faces in the same order,
+/// each with the cell across it.
+template <int Dim>
+void expect_adjacency_of(const tree::CellGraph<Dim>& g, const tree::CellAdjacency<Dim>& adj) {
+  long checked = 0;
+  g.for_each_cell([&](tree::CellId c) {
+    std::size_t all = 0;
+    for (int axis = 0; axis < Dim; ++axis) {
+      std::vector<std::pair<tree::FaceId, tree::CellId>> want, got;
+      for (tree::FaceId f : g.faces(c)) {
+        const tree::GraphFace& face = g.face(f);
+        if (face.axis == axis) want.emplace_back(f, face.cell[0] == c ? face.cell[1] : face.cell[0]);
+      }
+      for (const auto& side : adj.of(c, axis)) got.emplace_back(side.face, side.other);
+      ASSERT_EQ(got, want) << "cell " << c << ", axis " << axis;
+      all += got.size();
+    }
+    ASSERT_EQ(adj.of(c).size(), all) << "cell " << c;
+    ++checked;
+  });
+  EXPECT_EQ(checked, g.n_cells());
+}
+
+TYPED_TEST(CellGraphTest, AdjacencyFollowsTheTopology) {
+  // The topology number moves with every split and merge and differs between graphs built apart;
+  // an adjacency bound to a graph is remade when it moves, and matches the face lists each time.
+  constexpr int Dim = TypeParam::value;
+  tree::CellGraphOptions<Dim> options;
+  options.max_jump = tree::unlimited_jump;
+  tree::CellGraph<Dim> g = tree::random<Dim>(test_domain<Dim>(), 9, 1, Dim == 2 ? 6 : 4, 0.45, options);
+  const tree::CellGraph<Dim> other =
+      tree::random<Dim>(test_domain<Dim>(), 9, 1, Dim == 2 ? 6 : 4, 0.45, options);
+  EXPECT_NE(g.topology(), other.topology());
+  tree::CellAdjacency<Dim> adj;
+  adj.bind(other);
+  adj.bind(g);
+  expect_adjacency_of(g, adj);
+  std::mt19937_64 rng(3);
+  for (int round = 0; round < 6; ++round) {
+    const std::uint64_t before = g.topology();
+    const auto ids = g.cell_ids();
+    const tree::CellId c = ids[rng() % ids.size()];
+    if (round % 2 == 0 && g.level(c) < g.options().max_level) {
+      g.split(c);
+    } else if (const auto sib = g.siblings(c); sib && g.can_merge(c)) {
+      g.merge(*sib);
+    } else {
+      g.split(ids[0]);
+    }
+    ASSERT_NE(g.topology(), before) << "round " << round;
+    adj.bind(g);
+    expect_adjacency_of(g, adj);
+  }
+  const tree::CellGraph<Dim> copy = g;  // a copy has the same topology
+  EXPECT_EQ(copy.topology(), g.topology());
 }
 
 TYPED_TEST(CellGraphTest, KRingMatchesBruteForceAdjacency) {
