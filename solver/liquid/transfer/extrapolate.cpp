@@ -94,16 +94,7 @@ ExtrapolationReport extrapolate_faces(const tree::CellGraph<Dim>& graph, int lay
           const tree::FaceId f = candidates[i];
           const int axis = graph.face(f).axis;
           const auto want = static_cast<std::uint8_t>(1u << axis);
-          // The cells within a face hop of f's cells, by id (face_neighbourhood, from the pairs).
-          s.cells.clear();
-          for (tree::CellId c : graph.face(f).cell) {
-            if (c == tree::no_cell) continue;
-            s.cells.push_back(c);
-            for (const auto& side : adj.of(c))
-              if (side.other != tree::no_cell) s.cells.push_back(side.other);
-          }
-          std::sort(s.cells.begin(), s.cells.end());
-          s.cells.erase(std::unique(s.cells.begin(), s.cells.end()), s.cells.end());
+          face_neighbourhood<Dim>(graph, adj, f, s.cells);
           // Each face once: a face is counted from the lower-id cell holding it among s.cells.
           double sum = 0.0;
           long n = 0;

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "liquid/rbf/interpolant_cache.hpp"
+#include "liquid/tree/cell_adjacency.hpp"
 #include "liquid/tree/cell_graph.hpp"
 
 namespace liquid::transfer {
@@ -41,6 +42,21 @@ void face_neighbourhood(const tree::CellGraph<Dim>& graph, tree::FaceId f, std::
       const tree::CellId o = g.cell[0] == c ? g.cell[1] : g.cell[0];
       if (o != tree::no_cell) out.push_back(o);
     }
+  }
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+}
+
+/// The same cells, read from an adjacency bound to the graph (no face records loaded).
+template <int Dim>
+void face_neighbourhood(const tree::CellGraph<Dim>& graph, const tree::CellAdjacency<Dim>& adjacency,
+                        tree::FaceId f, std::vector<tree::CellId>& out) {
+  out.clear();
+  for (tree::CellId c : graph.face(f).cell) {
+    if (c == tree::no_cell) continue;
+    out.push_back(c);
+    for (const auto& side : adjacency.of(c))
+      if (side.other != tree::no_cell) out.push_back(side.other);
   }
   std::sort(out.begin(), out.end());
   out.erase(std::unique(out.begin(), out.end()), out.end());

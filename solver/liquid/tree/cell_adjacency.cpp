@@ -8,8 +8,7 @@ namespace liquid::tree {
 
 template <int Dim>
 void CellAdjacency<Dim>::bind(const CellGraph<Dim>& graph) {
-  if (graph_ == &graph && topology_ == graph.topology()) return;
-  graph_ = &graph;
+  if (topology_ == graph.topology()) return;
   topology_ = graph.topology();
   const long n_cells = graph.cell_capacity();
   start_.assign(static_cast<std::size_t>(n_cells) * Dim + 1, 0);

@@ -3,6 +3,7 @@
 // many cells' faces of one axis (the velocity extrapolation) read these 8-byte pairs instead of each
 // face's record. Derived from the topology alone, so it is rebuilt only when graph.topology() moves.
 
+#include <cstdint>
 #include <span>
 #include <vector>
 
@@ -18,7 +19,8 @@ class CellAdjacency {
     CellId other;  ///< the cell across the face, or no_cell on the domain boundary
   };
 
-  /// Made for `graph` as it is now; a call with the same graph and topology keeps what is there.
+  /// Made for `graph` as it is now; a call with the same topology (graph.topology()) keeps what is
+  /// there.
   void bind(const CellGraph<Dim>& graph);
 
   /// c's faces of `axis`, in the order graph.faces(c) lists them.
@@ -33,9 +35,8 @@ class CellAdjacency {
   }
 
  private:
-  const CellGraph<Dim>* graph_ = nullptr;
-  std::uint64_t topology_ = 0;
-  std::vector<long> start_;  // per (cell, axis), and one past the last
+  std::uint64_t topology_ = 0;  // 0: never bound (graphs' numbers start at 1)
+  std::vector<long> start_;     // per (cell, axis), and one past the last
   std::vector<Side> sides_;
 };
 
