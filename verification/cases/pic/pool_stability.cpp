@@ -21,8 +21,10 @@
 // Exact solution: u = 0, p = g (H - y).
 // Expected (asserted), for the default and for APIC: the speed stays below 1e-6 sqrt(gH) for the
 // whole run, and the growth rate is not above 0 by more than 2 standard errors (the paper's preset
-// grows with a doubling time near 1 s in 3D). The paper's preset and the full tier's comparison rows
-// are reported and warned about when they grow. Gated: the largest speed of every row (floored at 1e-12).
+// grows in 3D, doubling every 1-3 s). The paper's preset and the full tier's comparison rows are
+// reported and warned about when they grow; the paper's preset is asserted to grow in 3D (the
+// finding its row shows). Gated: the largest speed of every row that does not grow (floored at 1e-12);
+// a growing row's amplitude is round-off amplified and differs between builds of one commit.
 
 #include <cmath>
 #include <cstdio>
@@ -156,8 +158,17 @@ void study(const Tank& tank, const std::vector<FlowMethod>& methods, std::option
           {long(Dim), std::string(tank.name), long(tank.finest), std::string(m.name), o.t[i], o.speed[i]});
     }
     const std::string key = fmt::format("{}D {} L{} {}", Dim, tank.name, tank.finest, m.name);
-    result.gate.push_back({key + " max particle speed", GateFigure::Kind::error, std::max(o.largest, 1e-12)});
     const bool grows = !(o.rate - 2.0 * o.rate_error <= 0.0);
+    // A growing row's amplitude is round-off times e^(rate T): two builds of one commit put the
+    // paper's 3D row 6x apart, so only the rows that do not grow carry their speed into the gate.
+    if (!grows)
+      result.gate.push_back(
+          {key + " max particle speed", GateFigure::Kind::error, std::max(o.largest, 1e-12)});
+    if (m.paper && Dim == 3)
+      result.expect(grows, fmt::format("{}: the paper's preset no longer grows in 3D ({:.3f} +- {:.3f} / s): "
+                                       "the preset or the finding in docs/findings/transfer-stability.md "
+                                       "has changed",
+                                       key, o.rate, o.rate_error));
     if (m.paper || m.variant()) {
       if (grows || o.largest > 1e-6)
         result.warnings.push_back(fmt::format(
