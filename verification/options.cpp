@@ -143,6 +143,11 @@ void add_study_flags(CLI::App& app, StudyFlags& f) {
                  "ring stencils keep at most C x (their target size) nodes, the nearest; 0: whole rings")
       ->check(finite_number)
       ->check(CLI::Range(0.0, 8.0));
+  app.add_option("--gradient-cap", f.gradient_cap,
+                 "as --ring-cap, for the RBF-FD face gradients only (the PIC step's 3D default is 2); 0: "
+                 "--ring-cap applies")
+      ->check(finite_number)
+      ->check(CLI::Range(0.0, 8.0));
   app.add_option("--rows", f.rows,
                  "Poisson studies: refine the first row's tree uniformly (the paper's recursive subdivision) "
                  "or rebuild each row's tree by its rule")
@@ -205,13 +210,15 @@ void add_study_flags(CLI::App& app, StudyFlags& f) {
 
 CaseOptions case_options(const StudyFlags& f, const CaseInfo& info) {
   std::vector<std::string> refused;
-  for (Option o : {Option::levels,       Option::max_jump,   Option::solver,          Option::stencil,
-                   Option::rbf_exponent, Option::rbf_degree, Option::gradient_degree, Option::stencil_growth,
-                   Option::ring_cap,     Option::rows,       Option::nullspace,       Option::tolerance,
-                   Option::algebraic,    Option::perturb,    Option::trees,           Option::methods,
-                   Option::seed,         Option::particles,  Option::radius,          Option::aspect,
-                   Option::merge_wait,   Option::duration,   Option::sizes,           Option::resample_travel,
-                   Option::reference,    Option::band})
+  for (Option o : {Option::levels,          Option::max_jump,       Option::solver,
+                   Option::stencil,         Option::rbf_exponent,   Option::rbf_degree,
+                   Option::gradient_degree, Option::stencil_growth, Option::ring_cap,
+                   Option::gradient_cap,    Option::rows,           Option::nullspace,
+                   Option::tolerance,       Option::algebraic,      Option::perturb,
+                   Option::trees,           Option::methods,        Option::seed,
+                   Option::particles,       Option::radius,         Option::aspect,
+                   Option::merge_wait,      Option::duration,       Option::sizes,
+                   Option::resample_travel, Option::reference,      Option::band})
     if (f.given(o) && !info.accepts_option(o)) refused.push_back(flag_of(o));
   if (!refused.empty()) {
     std::vector<std::string> accepted;
@@ -240,6 +247,17 @@ CaseOptions case_options(const StudyFlags& f, const CaseInfo& info) {
       throw Error(fmt::format("--ring-cap limits the ring rule's stencils; --stencil {} takes none",
                               mac::to_string(f.stencil)));
     o.ring_cap = f.ring_cap;
+  }
+  if (f.given(Option::gradient_cap)) {
+    if (!(f.gradient_cap == 0.0 || f.gradient_cap >= 1.0))
+      throw Error(
+          fmt::format("--gradient-cap {} must be 0 (as --ring-cap) or at least 1 (a stencil keeps at least "
+                      "its target size)",
+                      f.gradient_cap));
+    if (f.gradient_cap != 0.0 && f.given(Option::stencil) && f.stencil != mac::StencilRule::ring)
+      throw Error(fmt::format("--gradient-cap limits the ring rule's stencils; --stencil {} takes none",
+                              mac::to_string(f.stencil)));
+    o.gradient_cap = f.gradient_cap;
   }
   if (f.given(Option::rows)) o.rows = f.rows;
   if (f.given(Option::nullspace)) o.nullspace = f.nullspace;
@@ -289,6 +307,7 @@ std::string echo(const std::string& case_name, const StudyFlags& f) {
   s += show(Option::gradient_degree, std::to_string(f.gradient_degree));
   s += show(Option::stencil_growth, fmt::format("{:g}", f.stencil_growth));
   s += show(Option::ring_cap, fmt::format("{:g}", f.ring_cap));
+  s += show(Option::gradient_cap, fmt::format("{:g}", f.gradient_cap));
   s += show(Option::rows, name_of(row_names, f.rows));
   s += show(Option::nullspace, name_of(nullspace_names, f.nullspace));
   s += show(Option::tolerance, fmt::format("{:g}", f.tolerance));

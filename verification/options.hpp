@@ -22,6 +22,7 @@ struct StudyFlags {
   int rbf_exponent = 3, rbf_degree = 3, gradient_degree = 3;
   double stencil_growth = 2.0;
   double ring_cap = 0.0;
+  double gradient_cap = 0.0;
   RowProtocol rows = RowProtocol::refine;
   NullspaceChoice nullspace = NullspaceChoice::pin;
   double tolerance = 1e-10;

@@ -29,6 +29,8 @@ const char* flag_of(Option option) {
       return "--stencil-growth";
     case Option::ring_cap:
       return "--ring-cap";
+    case Option::gradient_cap:
+      return "--gradient-cap";
     case Option::rows:
       return "--rows";
     case Option::nullspace:

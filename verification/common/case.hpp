@@ -29,6 +29,7 @@ enum class Option {
   gradient_degree,
   stencil_growth,
   ring_cap,
+  gradient_cap,
   rows,
   nullspace,
   tolerance,
@@ -103,6 +104,7 @@ struct CaseOptions {
   std::optional<int> gradient_degree;         ///< --gradient-degree M: degree of face gradients
   std::optional<double> stencil_growth;       ///< --stencil-growth G
   std::optional<double> ring_cap;             ///< --ring-cap C: ring stencils keep at most C x that size
+  std::optional<double> gradient_cap;         ///< --gradient-cap C: the same for face gradients only
   std::optional<RowProtocol> rows;            ///< --rows refine|rebuild
   std::optional<NullspaceChoice> nullspace;   ///< --nullspace pin|pin-point|zero-mean
   std::optional<double> tolerance;            ///< --tolerance T: the solver's relative residual
@@ -144,10 +146,11 @@ inline constexpr const char* kMaxCellsHelp =
 
 /// Every option of a Poisson convergence study (run_poisson_study reads them all).
 inline const OptionSet poisson_study_options{
-    Option::levels,       Option::max_jump,   Option::solver,          Option::stencil,
-    Option::rbf_exponent, Option::rbf_degree, Option::gradient_degree, Option::stencil_growth,
-    Option::ring_cap,     Option::rows,       Option::nullspace,       Option::tolerance,
-    Option::algebraic,    Option::perturb};
+    Option::levels,          Option::max_jump,       Option::solver,
+    Option::stencil,         Option::rbf_exponent,   Option::rbf_degree,
+    Option::gradient_degree, Option::stencil_growth, Option::ring_cap,
+    Option::gradient_cap,    Option::rows,           Option::nullspace,
+    Option::tolerance,       Option::algebraic,      Option::perturb};
 inline const OptionSet no_options{};
 
 /// A figure the accuracy gate compares with its accepted value in reference/<case>.toml.

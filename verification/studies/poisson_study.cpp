@@ -395,6 +395,7 @@ CaseResult run_poisson_study(PoissonStudy<Dim> study, const CaseOptions& options
   if (options.gradient_degree) study.discretisation.gradient_degree = *options.gradient_degree;
   if (options.stencil_growth) study.discretisation.growth = *options.stencil_growth;
   if (options.ring_cap) study.discretisation.ring_cap = *options.ring_cap;
+  if (options.gradient_cap) study.discretisation.gradient_ring_cap = *options.gradient_cap;
   if (options.rows) study.rows = *options.rows;
   if (options.nullspace) {
     LIQUID_VERIFY(!study.levelset && !study.dirichlet_walls,

@@ -69,8 +69,8 @@ bool face_gradient_weights(const tree::CellGraph<Dim>& graph, const DofLayout<Di
   const Vec<Dim> at = graph.face_centre(f);
   const tree::CellId seeds[2] = {g.cell[0], g.cell[1]};
   auto& nodes = scratch.nodes;
-  gather_stencil<Dim>(graph, layout, boundary, seeds, at, options.rule, n_target, options.node_cap(n_target),
-                      nodes);
+  gather_stencil<Dim>(graph, layout, boundary, seeds, at, options.rule, n_target,
+                      options.gradient_node_cap(n_target), nodes);
   const rbf::Status st = stencil_weights<Dim>(
       nodes, at, rbf::Operator<Dim>::partial(g.axis), config, scratch.w, scratch.n_retried,
       cache_for<Dim>(nodes, boundary, options.cache_weights ? cache : nullptr),

@@ -100,11 +100,22 @@ RowKind fd_row(const tree::CellGraph<Dim>& graph, const DofLayout<Dim>& layout, 
   return RowKind::fd;
 }
 
+namespace {
+int capped_size(double cap, const char* what, StencilRule rule, int n_target) {
+  LIQUID_VERIFY(cap == 0.0 || (cap >= 1.0 && std::isfinite(cap)),
+                "{} {} must be 0 (whole rings) or at least 1", what, cap);
+  if (rule != StencilRule::ring || cap == 0.0) return 0;
+  return static_cast<int>(std::ceil(cap * n_target));
+}
+}  // namespace
+
 int PoissonOptions::node_cap(int n_target) const {
-  LIQUID_VERIFY(ring_cap == 0.0 || (ring_cap >= 1.0 && std::isfinite(ring_cap)),
-                "ring_cap {} must be 0 (whole rings) or at least 1", ring_cap);
-  if (rule != StencilRule::ring || ring_cap == 0.0) return 0;
-  return static_cast<int>(std::ceil(ring_cap * n_target));
+  return capped_size(ring_cap, "ring_cap", rule, n_target);
+}
+
+int PoissonOptions::gradient_node_cap(int n_target) const {
+  if (gradient_ring_cap == 0.0) return node_cap(n_target);
+  return capped_size(gradient_ring_cap, "gradient_ring_cap", rule, n_target);
 }
 
 template <int Dim>

@@ -49,8 +49,15 @@ struct PoissonOptions {
   /// --ring-cap), not the default: faster in 3D but less accurate and less stable
   /// (docs/findings/poisson-convergence.md).
   double ring_cap = 0.0;
-  /// The most nodes a stencil of `n_target` may keep under the rule (0: no limit).
+  /// `ring` rule, face gradients only: keep at most this times their size (as ring_cap; 0: ring_cap
+  /// applies). The PIC step caps its 3D gradients at 2, the studies keep whole rings: at degree 2 the
+  /// cap leaves p untouched and dp/dn within 5% on the 3D Neumann study, and halves the projection's
+  /// cost in 3D scenes (docs/findings/table1-scale.md, "Capped gradient stencils").
+  double gradient_ring_cap = 0.0;
+  /// The most nodes a stencil of `n_target` may keep under the rule (0: no limit): Laplacian rows,
+  /// and face gradients.
   int node_cap(int n_target) const;
+  int gradient_node_cap(int n_target) const;
   bool regular_fd = true;                              ///< plain FD where the neighbourhood is regular
   IrregularRows irregular = IrregularRows::laplacian;  ///< the rows of the other cells (see above)
   Nullspace nullspace = Nullspace::pin;                ///< for singular (pure Neumann) problems

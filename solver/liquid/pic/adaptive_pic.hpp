@@ -139,7 +139,7 @@ struct PicOptions {
   /// Ranges left at 0 take the method's default: with the RBF transfer, sparse cells topped up
   /// (lo 3 in 2D, 5 in 3D, no hi, keep); [3, 12] (2D) and [5, 15] (3D) with PIC, FLIP and APIC.
   particles::ReseedOptions reseeding;
-  mac::PoissonOptions poisson = paper_poisson();
+  mac::PoissonOptions poisson = default_poisson();
   linalg::SolveOptions solver{linalg::SolverKind::bicgstab_ilut, 1e-8};
   bool continue_on_ppe_failure = false;  ///< false: a PPE that does not converge stops the run
   /// A PPE solve by a solver without AMG that does not converge (or breaks down) is retried once by
@@ -162,10 +162,15 @@ struct PicOptions {
   /// tree the RBF-FD rows are not D G, so a pin drops the right-hand side's mismatch with the left
   /// null vector into the pinned cell's equation, a point source there. Why:
   /// docs/findings/flow-studies.md. `[solver] nullspace = "pin"` in a scene restores the pin.
-  static mac::PoissonOptions paper_poisson() {
+  /// In 3D the face gradients keep at most twice their stencil size of the whole rings, the nearest
+  /// (scene key `[solver] ppe_gradient_cap`; 0 keeps whole rings): the projection costs about half,
+  /// p is untouched and dp/dn moves by under 5% (docs/findings/table1-scale.md, "Capped gradient
+  /// stencils"). In 2D the cap would bind where it costs the dam break's energy, and saves little.
+  static mac::PoissonOptions default_poisson() {
     mac::PoissonOptions p;
     p.rbf.degree = 2;
     p.gradient_degree = 2;
+    p.gradient_ring_cap = Dim == 3 ? 2.0 : 0.0;
     p.nullspace = mac::Nullspace::zero_mean;  // see above
     return p;
   }

@@ -603,6 +603,7 @@ const std::vector<std::string> solver_keys = {"method",
                                               "transfer_degree",
                                               "ppe_degree",
                                               "ppe_rows",
+                                              "ppe_gradient_cap",
                                               "patch_transfer",
                                               "level_change_p2g",
                                               "level_change_tent_share",
@@ -663,6 +664,15 @@ void read_pic_solver(const TableReader& r, Scene<Dim>& s) {
   // face gradients (the PPE then is exactly D G).
   if (r.has("ppe_rows"))
     o.poisson.irregular = mac::parse_irregular_rows(r.choice("ppe_rows", {"laplacian", "flux"}));
+  // The projection's RBF-FD face gradients keep at most this times their stencil size of the whole
+  // rings (0: whole rings; the default caps 3D at 2, 2D not at all).
+  if (r.has("ppe_gradient_cap")) {
+    o.poisson.gradient_ring_cap = r.number("ppe_gradient_cap");
+    LIQUID_VERIFY(o.poisson.gradient_ring_cap == 0.0 ||
+                      (o.poisson.gradient_ring_cap >= 1.0 && o.poisson.gradient_ring_cap <= 8.0),
+                  "{}: {} is neither 0 (whole rings) nor in [1, 8] (times the stencil size)",
+                  r.where("ppe_gradient_cap"), o.poisson.gradient_ring_cap);
+  }
   if (r.has("patch_transfer")) o.uniform_patches = r.choice("patch_transfer", {"apic", "rbf"}) == "apic";
   o.tent_at_level_changes = r.choice("level_change_p2g", {"rbf", "tent"}, std::string("rbf")) == "tent";
   LIQUID_VERIFY(!o.tent_at_level_changes || o.uniform_patches,

@@ -190,6 +190,58 @@ TEST(Poisson, RingCapBoundsTheStencilsAndKeepsQuadraticsExact) {
   EXPECT_GT(differ, 1e-6);
 }
 
+// PoissonOptions::gradient_ring_cap caps the face gradients alone: the Laplacian rows stay whole
+// rings (the same system), the capped gradients stay exact for quadratics and differ from the whole
+// rings' on a p that is no polynomial. At 0 the gradients take ring_cap.
+TEST(Poisson, GradientRingCapBoundsTheGradientsAlone) {
+  const tree::CellGraph<3> graph = non_graded<3>(2);
+  PoissonProblem<3> problem;
+  problem.f = quad_laplacian<3>;
+  problem.boundary.levelset = levelset::sphere<3>(Vec<3>::Constant(0.05), 0.7);
+  problem.boundary.dirichlet = quad<3>;
+  PoissonOptions whole, capped;
+  capped.gradient_ring_cap = 1.0;
+  const int n = stencil_size(3, whole.gradient_degree, whole.growth);
+  EXPECT_EQ(capped.node_cap(n), 0);
+  EXPECT_EQ(capped.gradient_node_cap(n), n);
+  PoissonOptions both = whole;
+  both.ring_cap = 2.0;
+  EXPECT_EQ(both.gradient_node_cap(n), 2 * n);  // 0: the rows' cap applies
+  PoissonOptions bad = whole;
+  bad.gradient_ring_cap = 0.5;
+  EXPECT_THROW(bad.gradient_node_cap(n), Error);
+
+  const PoissonSystem<3> a = assemble_poisson<3>(graph, problem, whole);
+  const PoissonSystem<3> b = assemble_poisson<3>(graph, problem, capped);
+  EXPECT_EQ(a.stats.max_stencil, b.stats.max_stencil);
+  EXPECT_EQ(a.stats.n_rbf_rows, b.stats.n_rbf_rows);
+  linalg::Vector pa, pb;
+  ASSERT_LT(direct_error_against_quad<3>(graph, a, &pa), 1e-9);
+  ASSERT_LT(direct_error_against_quad<3>(graph, b, &pb), 1e-9);
+  EXPECT_EQ((pa - pb).cwiseAbs().maxCoeff(), 0.0);
+  const auto dn = face_normal_derivative<3>(graph, b, capped, pb);
+  double err_grad = 0.0;
+  graph.for_each_face([&](tree::FaceId f) {
+    if (!std::isnan(dn[f]))
+      err_grad =
+          std::max(err_grad, std::abs(dn[f] - quad_gradient<3>(graph.face_centre(f))[graph.face(f).axis]));
+  });
+  EXPECT_LT(err_grad, 1e-7);
+  linalg::Vector q(b.n_unknowns());
+  for (long i = 0; i < b.n_unknowns(); ++i) {
+    const Vec<3> x = graph.centre(b.layout.cell_of_dof[i]);
+    q[i] = std::sin(3.0 * x[0]) * std::cos(2.0 * x[1]) * std::exp(x[2]);
+  }
+  const auto g_whole = face_normal_derivative<3>(graph, b, whole, q);
+  const auto g_capped = face_normal_derivative<3>(graph, b, capped, q);
+  double differ = 0.0;
+  graph.for_each_face([&](tree::FaceId f) {
+    if (std::isfinite(g_whole[f]) && std::isfinite(g_capped[f]))
+      differ = std::max(differ, std::abs(g_whole[f] - g_capped[f]));
+  });
+  EXPECT_GT(differ, 1e-6);
+}
+
 TEST(Poisson, InhomogeneousNeumannQuadraticIsExactOnNonGradedQuadtree) {
   inhomogeneous_neumann_quadratic_is_exact<2>();
 }

@@ -168,6 +168,28 @@ TEST(Scene, ValuesAndOverridesReachTheSolverOptions) {
     EXPECT_EQ(topped.pic.reseeding.hi, std::numeric_limits<int>::max());
     EXPECT_TRUE(topped.pic.reseeding.keep);
   }
+  {
+    // The face gradients' cap: 2 in 3D by default, none in 2D; [solver] ppe_gradient_cap sets it
+    // (0: whole rings), and the paper's preset leaves it.
+    const scene::Scene<3> drop = scene::load_scene<3>(scene::find_scene("drop-3d"));
+    EXPECT_EQ(drop.pic.poisson.gradient_ring_cap, 2.0);
+    EXPECT_EQ(drop.pic.poisson.ring_cap, 0.0);  // the Laplacian rows keep whole rings
+    EXPECT_EQ(scene::load_scene<2>(scene::find_scene("drop-2d")).pic.poisson.gradient_ring_cap, 0.0);
+    std::ifstream in(scene::find_scene("drop-3d"));
+    std::stringstream text;
+    text << in.rdbuf();
+    std::string toml = text.str();
+    const auto at = toml.find("[solver]");
+    const std::string keys = "\nppe_gradient_cap = 0";
+    toml = at == std::string::npos ? toml + "\n[solver]" + keys + "\n" : toml.insert(at + 8, keys);
+    const std::string path = ::testing::TempDir() + "/gradient-cap.toml";
+    std::ofstream(path) << toml;
+    const scene::Scene<3> whole = scene::load_scene<3>(path);
+    EXPECT_EQ(whole.pic.poisson.gradient_ring_cap, 0.0);
+    pic::PicOptions<3> paper = drop.pic;
+    paper.apply_paper_preset();
+    EXPECT_EQ(paper.poisson.gradient_ring_cap, 2.0);
+  }
   const scene::Scene<3> obstacles = scene::load_scene<3>(scene::find_scene("dam-break-obstacles-3d"));
   ASSERT_TRUE(static_cast<bool>(obstacles.pic.solid));
   EXPECT_LT(obstacles.pic.solid(Vec<3>(0.6, 0.9, 0.3)), 0.0);  // inside the pillar (infinite along y)
