@@ -144,6 +144,14 @@ void echo(const scene::Scene<Dim>& s, const scene::RunSettings& settings, bool r
                  : std::string("; a new hierarchy every step"),
              o.ppe_fallback && !amg ? "; bicgstab-amg where it does not converge" : "",
              o.continue_on_ppe_failure ? ", going on when it does not converge" : "");
+  if (o.adaptive)
+    fmt::print(
+        "  rbf-fd      PHS r^{} + degree {} rows at T-junctions on whole rings; face gradients degree {}{}\n",
+        o.poisson.rbf.exponent, o.poisson.rbf.degree, o.poisson.gradient_degree,
+        o.poisson.gradient_ring_cap > 0.0
+            ? fmt::format(" on the nearest {:g}x their stencil size (ppe_gradient_cap)",
+                          o.poisson.gradient_ring_cap)
+            : std::string(" on whole rings"));
   if (linalg::needs_symmetric(o.solver.kind))
     fmt::print(
         "              (while the liquid fills the box the PPE is bordered and indefinite: BiCGSTAB with "
