@@ -237,28 +237,19 @@ CaseOptions case_options(const StudyFlags& f, const CaseInfo& info) {
   if (f.given(Option::rbf_degree)) o.rbf_degree = f.rbf_degree;
   if (f.given(Option::gradient_degree)) o.gradient_degree = f.gradient_degree;
   if (f.given(Option::stencil_growth)) o.stencil_growth = f.stencil_growth;
-  if (f.given(Option::ring_cap)) {
-    if (!(f.ring_cap == 0.0 || f.ring_cap >= 1.0))
-      throw Error(
-          fmt::format("--ring-cap {} must be 0 (whole rings) or at least 1 (a stencil keeps at least its "
-                      "target size)",
-                      f.ring_cap));
-    if (f.ring_cap != 0.0 && f.given(Option::stencil) && f.stencil != mac::StencilRule::ring)
-      throw Error(fmt::format("--ring-cap limits the ring rule's stencils; --stencil {} takes none",
+  // A ring cap: 0 (whole rings; for --gradient-cap, --ring-cap's) or at least 1, and the ring rule's.
+  const auto cap = [&](Option option, double value, const char* zero) {
+    if (!(value == 0.0 || value >= 1.0))
+      throw Error(fmt::format("{} {} must be 0 ({}) or at least 1 (a stencil keeps at least its target size)",
+                              flag_of(option), value, zero));
+    if (value != 0.0 && f.given(Option::stencil) && f.stencil != mac::StencilRule::ring)
+      throw Error(fmt::format("{} limits the ring rule's stencils; --stencil {} takes none", flag_of(option),
                               mac::to_string(f.stencil)));
-    o.ring_cap = f.ring_cap;
-  }
-  if (f.given(Option::gradient_cap)) {
-    if (!(f.gradient_cap == 0.0 || f.gradient_cap >= 1.0))
-      throw Error(
-          fmt::format("--gradient-cap {} must be 0 (as --ring-cap) or at least 1 (a stencil keeps at least "
-                      "its target size)",
-                      f.gradient_cap));
-    if (f.gradient_cap != 0.0 && f.given(Option::stencil) && f.stencil != mac::StencilRule::ring)
-      throw Error(fmt::format("--gradient-cap limits the ring rule's stencils; --stencil {} takes none",
-                              mac::to_string(f.stencil)));
-    o.gradient_cap = f.gradient_cap;
-  }
+    return value;
+  };
+  if (f.given(Option::ring_cap)) o.ring_cap = cap(Option::ring_cap, f.ring_cap, "whole rings");
+  if (f.given(Option::gradient_cap))
+    o.gradient_cap = cap(Option::gradient_cap, f.gradient_cap, "as --ring-cap");
   if (f.given(Option::rows)) o.rows = f.rows;
   if (f.given(Option::nullspace)) o.nullspace = f.nullspace;
   if (f.given(Option::tolerance)) o.tolerance = f.tolerance;

@@ -133,15 +133,52 @@ void inhomogeneous_neumann_quadratic_is_exact() {
             0.1);
 }
 
+// The quadratic inside a sphere off the octree's centre, with its Dirichlet value on the sphere.
+PoissonProblem<3> quad_inside_sphere() {
+  PoissonProblem<3> problem;
+  problem.f = quad_laplacian<3>;
+  problem.boundary.levelset = levelset::sphere<3>(Vec<3>::Constant(0.05), 0.7);
+  problem.boundary.dirichlet = quad<3>;
+  return problem;
+}
+
+// The largest error of the face gradients under `options` of the solution p of `sys` against the
+// quadratic's gradient, over the faces that have one.
+double gradient_error_against_quad(const tree::CellGraph<3>& graph, const PoissonSystem<3>& sys,
+                                   const PoissonOptions& options, const linalg::Vector& p) {
+  const auto dn = face_normal_derivative<3>(graph, sys, options, p);
+  double err = 0.0;
+  graph.for_each_face([&](tree::FaceId f) {
+    if (!std::isnan(dn[f]))
+      err = std::max(err, std::abs(dn[f] - quad_gradient<3>(graph.face_centre(f))[graph.face(f).axis]));
+  });
+  return err;
+}
+
+// The largest difference between the face gradients under `a` and under `b` of a p that is no
+// polynomial (sampled at the unknowns of `sys`).
+double gradient_difference_off_polynomials(const tree::CellGraph<3>& graph, const PoissonSystem<3>& sys,
+                                           const PoissonOptions& a, const PoissonOptions& b) {
+  linalg::Vector q(sys.n_unknowns());
+  for (long i = 0; i < sys.n_unknowns(); ++i) {
+    const Vec<3> x = graph.centre(sys.layout.cell_of_dof[i]);
+    q[i] = std::sin(3.0 * x[0]) * std::cos(2.0 * x[1]) * std::exp(x[2]);
+  }
+  const auto ga = face_normal_derivative<3>(graph, sys, a, q);
+  const auto gb = face_normal_derivative<3>(graph, sys, b, q);
+  double differ = 0.0;
+  graph.for_each_face([&](tree::FaceId f) {
+    if (std::isfinite(ga[f]) && std::isfinite(gb[f])) differ = std::max(differ, std::abs(ga[f] - gb[f]));
+  });
+  return differ;
+}
+
 // PoissonOptions::ring_cap keeps the nearest nodes of the whole rings: the rows and the face
 // gradients stay exact for quadratics, and no stencil holds more than the cap plus the nodes tied
 // with its last one, where whole rings hold more. It applies to the ring rule alone.
 TEST(Poisson, RingCapBoundsTheStencilsAndKeepsQuadraticsExact) {
   const tree::CellGraph<3> graph = non_graded<3>(2);
-  PoissonProblem<3> problem;
-  problem.f = quad_laplacian<3>;
-  problem.boundary.levelset = levelset::sphere<3>(Vec<3>::Constant(0.05), 0.7);
-  problem.boundary.dirichlet = quad<3>;
+  const PoissonProblem<3> problem = quad_inside_sphere();
   PoissonOptions whole, capped;
   capped.ring_cap = 2.0;
   const int n = stencil_size(3, whole.rbf.degree, whole.growth);
@@ -163,31 +200,12 @@ TEST(Poisson, RingCapBoundsTheStencilsAndKeepsQuadraticsExact) {
   EXPECT_EQ(a.stats.n_rbf_rows, b.stats.n_rbf_rows);
   linalg::Vector p;
   ASSERT_LT(direct_error_against_quad<3>(graph, b, &p), 1e-9);
-  const auto dn = face_normal_derivative<3>(graph, b, capped, p);
-  double err_grad = 0.0;
-  graph.for_each_face([&](tree::FaceId f) {
-    if (!std::isnan(dn[f]))
-      err_grad =
-          std::max(err_grad, std::abs(dn[f] - quad_gradient<3>(graph.face_centre(f))[graph.face(f).axis]));
-  });
-  EXPECT_LT(err_grad, 1e-7);
+  EXPECT_LT(gradient_error_against_quad(graph, b, capped, p), 1e-7);
   // The face gradients take the cap too (their whole rings stay under 2N here, so it is tightened
   // to N): on a p that is no polynomial, theirs differ somewhere.
-  linalg::Vector q(b.n_unknowns());
-  for (long i = 0; i < b.n_unknowns(); ++i) {
-    const Vec<3> x = graph.centre(b.layout.cell_of_dof[i]);
-    q[i] = std::sin(3.0 * x[0]) * std::cos(2.0 * x[1]) * std::exp(x[2]);
-  }
-  const auto g_whole = face_normal_derivative<3>(graph, b, whole, q);
   PoissonOptions tight = capped;
   tight.ring_cap = 1.0;
-  const auto g_capped = face_normal_derivative<3>(graph, b, tight, q);
-  double differ = 0.0;
-  graph.for_each_face([&](tree::FaceId f) {
-    if (std::isfinite(g_whole[f]) && std::isfinite(g_capped[f]))
-      differ = std::max(differ, std::abs(g_whole[f] - g_capped[f]));
-  });
-  EXPECT_GT(differ, 1e-6);
+  EXPECT_GT(gradient_difference_off_polynomials(graph, b, whole, tight), 1e-6);
 }
 
 // PoissonOptions::gradient_ring_cap caps the face gradients alone: the Laplacian rows stay whole
@@ -195,10 +213,7 @@ TEST(Poisson, RingCapBoundsTheStencilsAndKeepsQuadraticsExact) {
 // rings' on a p that is no polynomial. At 0 the gradients take ring_cap.
 TEST(Poisson, GradientRingCapBoundsTheGradientsAlone) {
   const tree::CellGraph<3> graph = non_graded<3>(2);
-  PoissonProblem<3> problem;
-  problem.f = quad_laplacian<3>;
-  problem.boundary.levelset = levelset::sphere<3>(Vec<3>::Constant(0.05), 0.7);
-  problem.boundary.dirichlet = quad<3>;
+  const PoissonProblem<3> problem = quad_inside_sphere();
   PoissonOptions whole, capped;
   capped.gradient_ring_cap = 1.0;
   const int n = stencil_size(3, whole.gradient_degree, whole.growth);
@@ -219,27 +234,8 @@ TEST(Poisson, GradientRingCapBoundsTheGradientsAlone) {
   ASSERT_LT(direct_error_against_quad<3>(graph, a, &pa), 1e-9);
   ASSERT_LT(direct_error_against_quad<3>(graph, b, &pb), 1e-9);
   EXPECT_EQ((pa - pb).cwiseAbs().maxCoeff(), 0.0);
-  const auto dn = face_normal_derivative<3>(graph, b, capped, pb);
-  double err_grad = 0.0;
-  graph.for_each_face([&](tree::FaceId f) {
-    if (!std::isnan(dn[f]))
-      err_grad =
-          std::max(err_grad, std::abs(dn[f] - quad_gradient<3>(graph.face_centre(f))[graph.face(f).axis]));
-  });
-  EXPECT_LT(err_grad, 1e-7);
-  linalg::Vector q(b.n_unknowns());
-  for (long i = 0; i < b.n_unknowns(); ++i) {
-    const Vec<3> x = graph.centre(b.layout.cell_of_dof[i]);
-    q[i] = std::sin(3.0 * x[0]) * std::cos(2.0 * x[1]) * std::exp(x[2]);
-  }
-  const auto g_whole = face_normal_derivative<3>(graph, b, whole, q);
-  const auto g_capped = face_normal_derivative<3>(graph, b, capped, q);
-  double differ = 0.0;
-  graph.for_each_face([&](tree::FaceId f) {
-    if (std::isfinite(g_whole[f]) && std::isfinite(g_capped[f]))
-      differ = std::max(differ, std::abs(g_whole[f] - g_capped[f]));
-  });
-  EXPECT_GT(differ, 1e-6);
+  EXPECT_LT(gradient_error_against_quad(graph, b, capped, pb), 1e-7);
+  EXPECT_GT(gradient_difference_off_polynomials(graph, b, whole, capped), 1e-6);
 }
 
 TEST(Poisson, InhomogeneousNeumannQuadraticIsExactOnNonGradedQuadtree) {
