@@ -32,6 +32,16 @@ std::string scene_file(const std::string& name, const std::string& text) {
   return path;
 }
 
+/// The text of the built-in scene `name` with `keys` (lines) added to its [solver] table.
+std::string builtin_with_solver_keys(const std::string& name, const std::string& keys) {
+  std::ifstream in(scene::find_scene(name));
+  std::stringstream text;
+  text << in.rdbuf();
+  std::string toml = text.str();
+  const auto at = toml.find("[solver]");
+  return at == std::string::npos ? toml + "\n[solver]\n" + keys + "\n" : toml.insert(at + 8, "\n" + keys);
+}
+
 TEST(Scene, EveryBuiltinSceneLoadsInItsDimension) {
   const auto scenes = scene::builtin_scenes();
   ASSERT_GE(scenes.size(), 14u);  // seven scenes, 2D and 3D
@@ -101,15 +111,8 @@ TEST(Scene, ValuesAndOverridesReachTheSolverOptions) {
   }
   {
     // [solver] preset = "paper" does the same; a key after it overrides what the preset set.
-    std::ifstream in(scene::find_scene("drop-2d"));
-    std::stringstream text;
-    text << in.rdbuf();
-    std::string toml = text.str();
-    const auto at = toml.find("[solver]");
-    const std::string keys = "\npreset = \"paper\"\ntransfer_degree = 1";
-    toml = at == std::string::npos ? toml + "\n[solver]" + keys + "\n" : toml.insert(at + 8, keys);
-    const std::string path = ::testing::TempDir() + "/paper-preset.toml";
-    std::ofstream(path) << toml;
+    const std::string path = scene_file(
+        "paper-preset", builtin_with_solver_keys("drop-2d", "preset = \"paper\"\ntransfer_degree = 1"));
     const scene::Scene<2> paper = scene::load_scene<2>(path);
     EXPECT_TRUE(paper.paper_preset);
     EXPECT_EQ(paper.pic.rbf.exponent, 5);
@@ -119,16 +122,11 @@ TEST(Scene, ValuesAndOverridesReachTheSolverOptions) {
   {
     // [solver] share_factors = false and condition_estimate = "hager-higham" reach the transfer's
     // options, nullspace = "pin" the PPE's, and the transfer kernel and holes-only reseeding theirs.
-    std::ifstream in(scene::find_scene("drop-2d"));
-    std::stringstream text;
-    text << in.rdbuf();
-    std::string toml = text.str();
-    const auto at = toml.find("[solver]");
-    const std::string keys =
-        "\nshare_factors = false\ncondition_estimate = \"hager-higham\"\nnullspace = \"pin\""
+    std::string toml = builtin_with_solver_keys(
+        "drop-2d",
+        "share_factors = false\ncondition_estimate = \"hager-higham\"\nnullspace = \"pin\""
         "\ntransfer_exponent = 3\ntransfer_degree = 1\nreseed_mode = \"holes\"\nppe_degree = 3"
-        "\nppe_rows = \"flux\"";
-    toml = at == std::string::npos ? toml + "\n[solver]" + keys + "\n" : toml.insert(at + 8, keys);
+        "\nppe_rows = \"flux\"");
     const std::string path = ::testing::TempDir() + "/own-factors.toml";
     std::ofstream(path) << toml;
     const scene::Scene<2> own = scene::load_scene<2>(path);
@@ -175,16 +173,8 @@ TEST(Scene, ValuesAndOverridesReachTheSolverOptions) {
     EXPECT_EQ(drop.pic.poisson.gradient_ring_cap, 2.0);
     EXPECT_EQ(drop.pic.poisson.ring_cap, 0.0);  // the Laplacian rows keep whole rings
     EXPECT_EQ(scene::load_scene<2>(scene::find_scene("drop-2d")).pic.poisson.gradient_ring_cap, 0.0);
-    std::ifstream in(scene::find_scene("drop-3d"));
-    std::stringstream text;
-    text << in.rdbuf();
-    std::string toml = text.str();
-    const auto at = toml.find("[solver]");
-    const std::string keys = "\nppe_gradient_cap = 0";
-    toml = at == std::string::npos ? toml + "\n[solver]" + keys + "\n" : toml.insert(at + 8, keys);
-    const std::string path = ::testing::TempDir() + "/gradient-cap.toml";
-    std::ofstream(path) << toml;
-    const scene::Scene<3> whole = scene::load_scene<3>(path);
+    const scene::Scene<3> whole = scene::load_scene<3>(
+        scene_file("gradient-cap", builtin_with_solver_keys("drop-3d", "ppe_gradient_cap = 0")));
     EXPECT_EQ(whole.pic.poisson.gradient_ring_cap, 0.0);
     pic::PicOptions<3> paper = drop.pic;
     paper.apply_paper_preset();
