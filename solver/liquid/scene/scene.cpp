@@ -589,6 +589,7 @@ const std::vector<std::string> solver_keys = {"method",
                                               "reseed",
                                               "refill_emptied",
                                               "reseed_mode",
+                                              "reseed_max",
                                               "gravity",
                                               "extrapolation",
                                               "advect_cfl",
@@ -651,6 +652,20 @@ void read_pic_solver(const TableReader& r, Scene<Dim>& s) {
       o.reseeding.lo = Dim == 2 ? 3 : 5;
       o.reseeding.hi = Dim == 2 ? 12 : 15;
     }
+  }
+  // The most particles a cell keeps before reseeding thins it (keep, top-up) or replaces them
+  // (replace); 0: never. Without reseed_mode, the method's own mode takes it: top-up with rbf.
+  if (r.has("reseed_max")) {
+    constexpr long per_cell = 1L << Dim;  // a reseeded cell holds 2^Dim particles
+    const long most = r.integer("reseed_max");
+    LIQUID_VERIFY(most == 0 || (most >= per_cell && most <= 1'000'000),
+                  "{}: {} is neither 0 (never thin) nor in [{}, 1000000] (a reseeded cell holds {})",
+                  r.where("reseed_max"), most, per_cell, per_cell);
+    if (o.reseeding.lo == 0) {  // no reseed_mode, no preset: the method's default range
+      o.reseeding.lo = Dim == 2 ? 3 : 5;
+      o.reseeding.keep = o.transfer == pic::PicTransfer::rbf;
+    }
+    o.reseeding.hi = most == 0 ? std::numeric_limits<int>::max() : static_cast<int>(most);
   }
   o.rbf.exponent = static_cast<int>(r.integer_in("transfer_exponent", 1, 9, o.rbf.exponent));
   LIQUID_VERIFY(o.rbf.exponent % 2 == 1, "{}: the PHS exponent must be odd (1, 3, 5, 7 or 9), got {}",

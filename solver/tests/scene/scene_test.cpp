@@ -180,6 +180,31 @@ TEST(Scene, ValuesAndOverridesReachTheSolverOptions) {
     paper.apply_paper_preset();
     EXPECT_EQ(paper.poisson.gradient_ring_cap, 2.0);
   }
+  {
+    // reseed_max: without reseed_mode the RBF transfer tops up sparse cells and now thins cells holding
+    // more than it to 2^d of their own; with a mode it bounds that mode's range; 0 never thins.
+    const scene::Scene<3> thin = scene::load_scene<3>(
+        scene_file("reseed-max", builtin_with_solver_keys("drop-3d", "reseed_max = 32")));
+    EXPECT_EQ(thin.pic.reseeding.lo, 5);
+    EXPECT_EQ(thin.pic.reseeding.hi, 32);
+    EXPECT_TRUE(thin.pic.reseeding.keep);
+    const scene::Scene<2> replace = scene::load_scene<2>(
+        scene_file("reseed-max-replace",
+                   builtin_with_solver_keys("drop-2d", "reseed_mode = \"replace\"\nreseed_max = 20")));
+    EXPECT_EQ(replace.pic.reseeding.lo, 3);
+    EXPECT_EQ(replace.pic.reseeding.hi, 20);
+    EXPECT_FALSE(replace.pic.reseeding.keep);
+    const scene::Scene<2> apic = scene::load_scene<2>(scene_file(
+        "reseed-max-apic",
+        builtin_with_solver_keys("drop-2d", "method = \"apic\"\nadaptive = false\nreseed_max = 0")));
+    EXPECT_EQ(apic.pic.reseeding.lo, 3);
+    EXPECT_EQ(apic.pic.reseeding.hi, std::numeric_limits<int>::max());
+    EXPECT_FALSE(apic.pic.reseeding.keep);  // the regular methods' own mode replaces
+    const scene::Scene<3> paper = scene::load_scene<3>(scene_file(
+        "reseed-max-paper", builtin_with_solver_keys("drop-3d", "preset = \"paper\"\nreseed_max = 24")));
+    EXPECT_EQ(paper.pic.reseeding.hi, 24);  // a key after the preset overrides it
+    EXPECT_FALSE(paper.pic.paper_preset());
+  }
   const scene::Scene<3> obstacles = scene::load_scene<3>(scene::find_scene("dam-break-obstacles-3d"));
   ASSERT_TRUE(static_cast<bool>(obstacles.pic.solid));
   EXPECT_LT(obstacles.pic.solid(Vec<3>(0.6, 0.9, 0.3)), 0.0);  // inside the pillar (infinite along y)
