@@ -654,7 +654,7 @@ void read_pic_solver(const TableReader& r, Scene<Dim>& s) {
     }
   }
   // The most particles a cell keeps before reseeding thins it (keep, top-up) or replaces them
-  // (replace); 0: never. Without reseed_mode, the method's own mode takes it: top-up with rbf.
+  // (replace, holes); 0: never. Without reseed_mode, the method's own mode takes it: top-up with rbf.
   if (r.has("reseed_max")) {
     constexpr long per_cell = 1L << Dim;  // a reseeded cell holds 2^Dim particles
     const long most = r.integer("reseed_max");

@@ -181,7 +181,7 @@ TEST(Scene, ValuesAndOverridesReachTheSolverOptions) {
     EXPECT_EQ(paper.poisson.gradient_ring_cap, 2.0);
   }
   {
-    // reseed_max: without reseed_mode the RBF transfer tops up sparse cells and now thins cells holding
+    // reseed_max: without reseed_mode the RBF transfer tops up sparse cells and thins cells holding
     // more than it to 2^d of their own; with a mode it bounds that mode's range; 0 never thins.
     const scene::Scene<3> thin = scene::load_scene<3>(
         scene_file("reseed-max", builtin_with_solver_keys("drop-3d", "reseed_max = 32")));
